@@ -1,0 +1,85 @@
+//! The trait every node implements, and the one function that maps a command onto it.
+//! Both transports (iceoryx2 and in-process) call [`dispatch`], so a component behaves the
+//! same, bit for bit, whichever way it is linked.
+use crate::{Command, Configured, Exchange, ModelDescription, Phase, PhaseReport, Reply};
+
+/// An error a component reports to the user: one clear sentence, no panic.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct ComponentError(pub String);
+
+impl ComponentError {
+    pub fn new(msg: impl Into<String>) -> Self {
+        Self(msg.into())
+    }
+}
+
+impl From<crate::exchange::ExchangeError> for ComponentError {
+    fn from(e: crate::exchange::ExchangeError) -> Self {
+        Self(e.to_string())
+    }
+}
+
+/// A co-simulation component (a fibre model, a fluid solver).
+///
+/// Setup allocates; [`Component::run_phase`] should not.
+pub trait Component {
+    /// The model description (does not depend on the scene).
+    fn describe(&self) -> ModelDescription;
+
+    /// Read the scene, build the initial state, check the time step against the component's
+    /// own stability limits, and publish the initial bead states through `exchange`.
+    fn configure(
+        &mut self,
+        scene_toml: &str,
+        exchange: &mut dyn Exchange,
+    ) -> Result<Configured, ComponentError>;
+
+    /// Run one phase of one step, reading inputs from and publishing outputs to `exchange`.
+    fn run_phase(
+        &mut self,
+        step: u64,
+        phase: Phase,
+        exchange: &mut dyn Exchange,
+    ) -> Result<PhaseReport, ComponentError>;
+
+    /// The full state, serialised, such that `restore_state` brings it back exactly.
+    fn save_state(&self) -> Result<Vec<u8>, ComponentError>;
+
+    /// Replace the full state by one from `save_state`.
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), ComponentError>;
+}
+
+/// Run one command on a component. Returns the reply and whether the serving loop should end.
+pub fn dispatch(
+    component: &mut dyn Component,
+    exchange: &mut dyn Exchange,
+    command: Command,
+) -> (Reply, bool) {
+    let as_reply = |r: Result<Reply, ComponentError>| r.unwrap_or_else(|e| Reply::Error(e.0));
+    match command {
+        Command::Describe => (Reply::Description(component.describe()), false),
+        Command::Configure { scene_toml } => (
+            as_reply(
+                component
+                    .configure(&scene_toml, exchange)
+                    .map(Reply::Configured),
+            ),
+            false,
+        ),
+        Command::RunPhase { step, phase } => (
+            as_reply(
+                component
+                    .run_phase(step, phase, exchange)
+                    .map(Reply::PhaseDone),
+            ),
+            false,
+        ),
+        Command::SaveState => (as_reply(component.save_state().map(Reply::State)), false),
+        Command::RestoreState { state } => (
+            as_reply(component.restore_state(&state).map(|_| Reply::Ok)),
+            false,
+        ),
+        Command::Shutdown => (Reply::Ok, true),
+    }
+}

@@ -1,0 +1,59 @@
+//! Phases of the fractional step. The coordinator tells each node which phase of which step
+//! to run; a node never runs a phase on its own.
+use serde::{Deserialize, Serialize};
+
+/// One phase of one step, named by the node that runs it and what it does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Phase {
+    /// SPM 1: fluid advances psi (Cahn-Hilliard) with u^n.
+    FluidPhaseField,
+    /// SPM 2: fibre advances positions and quaternions to n+1 and publishes bead states.
+    FibrePositions,
+    /// SPM 3: fluid builds phi^{n+1}, computes u*, integrates the momentum exchange per bead
+    /// (L2020 eqs. 35-36) and publishes the impulses.
+    FluidMomentumExchange,
+    /// SPM 4: fibre advances velocities with beam forces, impulses and loads; publishes states.
+    FibreVelocities,
+    /// SPM 5: fluid penalty and projection to u^{n+1} (L2020 eqs. 37-38).
+    FluidPenalty,
+    /// FPD 1: fibre computes bead forces from positions and publishes them.
+    FibreForces,
+    /// FPD 2: fluid spreads forces, runs one LBM step, publishes bead velocities (S2023 eq. 5).
+    FluidLatticeStep,
+    /// FPD 3: fibre advances positions with the velocities it received.
+    FibreAdvance,
+}
+
+impl Phase {
+    /// The node kind that runs this phase: `"fibre"` or `"fluid"`.
+    pub fn node(self) -> &'static str {
+        match self {
+            Phase::FibrePositions
+            | Phase::FibreVelocities
+            | Phase::FibreForces
+            | Phase::FibreAdvance => "fibre",
+            _ => "fluid",
+        }
+    }
+
+    /// Kebab-case name, as in logs and messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::FluidPhaseField => "fluid-phase-field",
+            Phase::FibrePositions => "fibre-positions",
+            Phase::FluidMomentumExchange => "fluid-momentum-exchange",
+            Phase::FibreVelocities => "fibre-velocities",
+            Phase::FluidPenalty => "fluid-penalty",
+            Phase::FibreForces => "fibre-forces",
+            Phase::FluidLatticeStep => "fluid-lattice-step",
+            Phase::FibreAdvance => "fibre-advance",
+        }
+    }
+}
+
+impl std::fmt::Display for Phase {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}

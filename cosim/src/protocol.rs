@@ -1,0 +1,74 @@
+//! Control messages: the coordinator sends a [`Command`], the node answers one [`Reply`].
+//! Control is small and infrequent next to bulk data, so it travels as JSON.
+use crate::{ModelDescription, Phase};
+use serde::{Deserialize, Serialize};
+
+/// A request from the coordinator to a node.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Command {
+    /// Answer with the model description.
+    Describe,
+    /// Read the scene (full TOML text; the node reads its own sections), build the initial
+    /// state, check the time step, and publish the initial bead states.
+    Configure { scene_toml: String },
+    /// Run one phase of one step.
+    RunPhase { step: u64, phase: Phase },
+    /// Answer with the full state, serialised (checkpoint).
+    SaveState,
+    /// Replace the full state by one saved earlier.
+    RestoreState { state: Vec<u8> },
+    /// Release resources and end the serving loop.
+    Shutdown,
+}
+
+/// A node's answer to one [`Command`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Reply {
+    Description(ModelDescription),
+    Configured(Configured),
+    PhaseDone(PhaseReport),
+    State(Vec<u8>),
+    Ok,
+    /// The command failed; the message says why, for the user.
+    Error(String),
+}
+
+/// What a node reports after reading the scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct Configured {
+    /// Beads per fibre (fibre node) or empty (fluid node).
+    pub beads_per_fibre: Vec<usize>,
+    /// Effects the node will compute for this scene.
+    pub effects: Vec<String>,
+    /// Stability limits the node derived, by name, in the scene's time unit
+    /// (e.g. `("beam stiffness", 0.21)`), already compared against `time.dt`.
+    pub time_step_limits: Vec<(String, f64)>,
+    /// Dimensionless numbers and derived quantities worth reporting, by name.
+    pub derived: Vec<(String, f64)>,
+}
+
+/// What a node reports after one phase: scalar diagnostics by name, in a fixed order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct PhaseReport {
+    pub diagnostics: Vec<(String, f64)>,
+}
+
+impl Command {
+    pub fn to_bytes(&self) -> Vec<u8> {
+        serde_json::to_vec(self).expect("a command always serialises")
+    }
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, String> {
+        serde_json::from_slice(bytes).map_err(|e| format!("malformed command: {e}"))
+    }
+}
+
+impl Reply {
+    pub fn to_bytes(&self) -> Vec<u8> {
+        serde_json::to_vec(self).expect("a reply always serialises")
+    }
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, String> {
+        serde_json::from_slice(bytes).map_err(|e| format!("malformed reply: {e}"))
+    }
+}
