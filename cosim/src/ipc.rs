@@ -1,2 +1,237 @@
 //! iceoryx2 transport: control by request-response, bulk data by publish-subscribe.
-//! (Being written; see the module docs once it lands.)
+//!
+//! # Services of a run
+//! Every service of a run is named under one run prefix from [`new_run_prefix`]
+//! (process id, clock nanoseconds and a per-process counter), so parallel runs and tests
+//! never meet. For a node `N` of run `P`:
+//! - `P/node/N/control`: request-response of `[u8]` JSON ([`crate::Command`] -> [`crate::Reply`]);
+//! - `P/node/N/wake`: event the node waits on (a request is pending, or a new reader asks for
+//!   the latest publication);
+//! - `P/node/N/reply`: event the [`NodeClient`] waits on (a reply is ready);
+//! - `P/port/<port>/<Record>`: one publish-subscribe service per data port and record type,
+//!   `[Record]` slices with an [`crate::ExchangeHeader`] user header (see [`IpcExchange`]).
+//!
+//! # Waiting
+//! Whoever waits (the node for a request, the coordinator for a reply) first polls for about
+//! [`SPIN`] (a phase of the other side is often that short), then blocks on its iceoryx2
+//! event listener in slices of at most [`BLOCK_SLICE`]. Events are latched, so a notification
+//! sent while the waiter was still polling wakes it at once; a spurious wake-up costs one poll.
+//! Between slices the waiter checks that its peer is still there. Nothing busy-loops unbounded.
+//!
+//! # Dead peers
+//! - The coordinator side ([`NodeClient`]) owns the node's process: between waits it calls
+//!   `try_wait` on the child and reports [`LinkError::Died`] with the exit status and the last
+//!   lines of the node's stderr. For a node served by a thread ([`NodeClient::connect`]) it
+//!   notices the server leaving the control service.
+//! - The node side ([`serve`]) returns [`IpcError::CoordinatorGone`] when its parent process
+//!   changes (the coordinator exited and the node was re-parented), when the coordinator's
+//!   iceoryx2 node is dead, or when the coordinator's client left without sending `Shutdown`.
+//!
+//! # Stale resources
+//! A normal drop releases everything: the last owner of a service removes it from `/dev/shm`
+//! and `/tmp/iceoryx2`. A killed process leaves its resources behind;
+//! [`cleanup_stale_resources`] (called at coordinator start, and after a node had to be killed)
+//! removes those of every dead iceoryx2 node.
+mod client;
+mod exchange;
+mod serve;
+
+pub use client::{LinkError, NodeClient};
+pub use exchange::IpcExchange;
+pub use serve::serve;
+
+use iceoryx2::config::Config;
+use iceoryx2::node::{Node, NodeBuilder, NodeState, NodeView};
+use iceoryx2::prelude::{CallbackProgression, NodeName, ServiceName, SignalHandlingMode};
+use iceoryx2::service::{ipc, Service};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::OnceLock;
+use std::time::Duration;
+
+/// How long a waiter polls before it blocks on its event listener.
+pub const SPIN: Duration = Duration::from_micros(50);
+/// The longest a waiter blocks before it checks on its peer again.
+pub const BLOCK_SLICE: Duration = Duration::from_millis(50);
+
+/// An error of the node side of the transport.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum IpcError {
+    #[error("iceoryx2 could not {action}: {message}")]
+    Iceoryx { action: String, message: String },
+    #[error("node {node} stops because its coordinator is gone: {reason}")]
+    CoordinatorGone { node: String, reason: String },
+    #[error("{what} {name:?} is not usable as an iceoryx2 name: {reason}")]
+    InvalidName {
+        what: &'static str,
+        name: String,
+        reason: String,
+    },
+}
+
+impl IpcError {
+    pub(crate) fn iox<E: std::fmt::Debug>(action: impl Into<String>) -> impl FnOnce(E) -> Self {
+        let action = action.into();
+        move |e| IpcError::Iceoryx {
+            action,
+            message: format!("{e:?}"),
+        }
+    }
+}
+
+/// iceoryx2's defaults (`/tmp/iceoryx2`, `/dev/shm/iox2_*`), the same in every process of a
+/// run; iceoryx2.toml files are ignored, which also spares each process a warning on stderr.
+pub(crate) fn config() -> &'static Config {
+    static CONFIG: OnceLock<Config> = OnceLock::new();
+    CONFIG.get_or_init(Config::default)
+}
+
+/// A fresh prefix for the services of one run, unique on this machine for practical purposes.
+pub fn new_run_prefix() -> String {
+    static COUNTER: AtomicU32 = AtomicU32::new(0);
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos());
+    format!(
+        "cosim-{:x}-{:x}-{}",
+        std::process::id(),
+        nanos & 0xffff_ffff_ffff,
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    )
+}
+
+/// Removes the stale resources of every dead iceoryx2 node on this machine (a process that
+/// was killed before it could release them). Returns how many dead nodes were cleaned.
+pub fn cleanup_stale_resources() -> usize {
+    let mut cleaned = 0;
+    let _ = Node::<ipc::Service>::list(config(), |state| {
+        if let NodeState::Dead(view) = state {
+            if view.try_remove_stale_resources().is_ok() {
+                cleaned += 1;
+            }
+        }
+        CallbackProgression::Continue
+    });
+    cleaned
+}
+
+/// Names of the iceoryx2 services and nodes of run `prefix` that still exist (empty once a
+/// run has released everything; tests use it to check cleanup).
+pub fn resources_of_run(prefix: &str) -> Vec<String> {
+    let under = format!("{prefix}/");
+    let mut found = Vec::new();
+    let _ = ipc::Service::list(config(), |details| {
+        let name = details.static_details.name().as_str();
+        if name.starts_with(&under) {
+            found.push(format!("service {name}"));
+        }
+        CallbackProgression::Continue
+    });
+    let _ = Node::<ipc::Service>::list(config(), |state| {
+        let name = match &state {
+            NodeState::Alive(v) => v.details().as_ref().map(|d| d.name().to_string()),
+            NodeState::Dead(v) => v.details().as_ref().map(|d| d.name().to_string()),
+            _ => None,
+        };
+        if let Some(name) = name.filter(|n| n.starts_with(&under)) {
+            found.push(format!("node {name}"));
+        }
+        CallbackProgression::Continue
+    });
+    found
+}
+
+/// Service and node names of one participant of a run.
+pub(crate) struct Names {
+    pub node: String,
+    pub control: String,
+    pub wake: String,
+    pub reply: String,
+}
+
+impl Names {
+    pub fn new(prefix: &str, participant: &str) -> Result<Self, IpcError> {
+        check_name("run prefix", prefix)?;
+        check_name("node name", participant)?;
+        let node = format!("{prefix}/node/{participant}");
+        let names = Self {
+            control: format!("{node}/control"),
+            wake: format!("{node}/wake"),
+            reply: format!("{node}/reply"),
+            node,
+        };
+        service_name(&names.control)?;
+        node_name(&names.node)?;
+        Ok(names)
+    }
+}
+
+fn check_name(what: &'static str, name: &str) -> Result<(), IpcError> {
+    let bad = |reason: &str| IpcError::InvalidName {
+        what,
+        name: name.to_string(),
+        reason: reason.to_string(),
+    };
+    if name.is_empty() {
+        return Err(bad("it is empty"));
+    }
+    if name.contains('/') || name.chars().any(char::is_control) {
+        return Err(bad("it contains '/' or a control character"));
+    }
+    Ok(())
+}
+
+pub(crate) fn service_name(name: &str) -> Result<ServiceName, IpcError> {
+    ServiceName::new(name).map_err(|e| IpcError::InvalidName {
+        what: "service name",
+        name: name.to_string(),
+        reason: format!("{e:?}"),
+    })
+}
+
+pub(crate) fn node_name(name: &str) -> Result<NodeName, IpcError> {
+    NodeName::new(name).map_err(|e| IpcError::InvalidName {
+        what: "node name",
+        name: name.to_string(),
+        reason: format!("{e:?}"),
+    })
+}
+
+/// An iceoryx2 node that leaves signals to the coordinator (it owns Ctrl-C).
+pub(crate) fn create_node<S: Service>(name: &str) -> Result<Node<S>, IpcError> {
+    NodeBuilder::new()
+        .name(&node_name(name)?)
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .config(config())
+        .create::<S>()
+        .map_err(IpcError::iox(format!("create node {name}")))
+}
+
+/// Control requests and replies: JSON bytes.
+pub(crate) type Control<S> =
+    iceoryx2::service::port_factory::request_response::PortFactory<S, [u8], (), [u8], ()>;
+
+/// The control service of a node; both sides open it with the same settings.
+pub(crate) fn control_service<S: Service>(
+    node: &Node<S>,
+    name: &str,
+) -> Result<Control<S>, IpcError> {
+    node.service_builder(&service_name(name)?)
+        .request_response::<[u8], [u8]>()
+        .max_clients(2)
+        .max_servers(1)
+        .open_or_create()
+        .map_err(IpcError::iox(format!("open service {name}")))
+}
+
+pub(crate) fn event_service<S: Service>(
+    node: &Node<S>,
+    name: &str,
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, IpcError> {
+    node.service_builder(&service_name(name)?)
+        .event()
+        .open_or_create()
+        .map_err(IpcError::iox(format!("open service {name}")))
+}
+
+/// Initial size of control messages; requests and replies grow by powers of two.
+pub(crate) const CONTROL_INITIAL_BYTES: usize = 4096;
