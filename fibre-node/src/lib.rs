@@ -1,1 +1,3 @@
-
+//! Lagrangian fibre models served as a co-simulation component.
+pub mod energies;
+pub mod quaternion;
