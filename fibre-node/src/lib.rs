@@ -1,3 +1,4 @@
 //! Lagrangian fibre models served as a co-simulation component.
+pub mod cohesive_beam;
 pub mod energies;
 pub mod quaternion;
