@@ -1,4 +1,5 @@
 //! Lagrangian fibre models served as a co-simulation component.
+pub mod bead_spring;
 pub mod cohesive_beam;
 pub mod energies;
 pub mod quaternion;
