@@ -1,5 +1,6 @@
 //! Lagrangian fibre models served as a co-simulation component.
 pub mod bead_spring;
 pub mod cohesive_beam;
+pub mod config;
 pub mod energies;
 pub mod quaternion;

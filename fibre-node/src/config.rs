@@ -1,0 +1,638 @@
+//! The part of the scene the fibre node reads: `dimensions`, `time.dt`, whether a `[fluid]`
+//! table exists, and the `[[fibre]]` array of tables. Other top-level tables are the
+//! coordinator's to validate and are ignored here.
+//!
+//! Every refusal names the dotted path (`fibre.N.key`), the value and what was expected;
+//! nothing panics on any input.
+use serde::Deserialize;
+
+/// Which fibre model a `[[fibre]]` table asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelKind {
+    /// L2020 cohesive beam (`"cohesive-beam"`).
+    CohesiveBeam,
+    /// S2023 bead-spring chain (`"bead-spring"`).
+    BeadSpring,
+}
+
+impl ModelKind {
+    /// The name used in the scene.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::CohesiveBeam => "cohesive-beam",
+            ModelKind::BeadSpring => "bead-spring",
+        }
+    }
+}
+
+/// A constant point load on one bead (laboratory frame).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadConfig {
+    /// Bead index, resolved (0-based, non-negative).
+    pub bead: usize,
+    pub force: [f64; 3],
+    pub torque: [f64; 3],
+}
+
+/// One validated `[[fibre]]` table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FibreConfig {
+    pub model: ModelKind,
+    pub beads: usize,
+    pub bead_radius: f64,
+    pub youngs_modulus: f64,
+    pub shear_modulus: f64,
+    pub density: f64,
+    pub start: [f64; 3],
+    /// Unit vector.
+    pub direction: [f64; 3],
+    pub spacing: f64,
+    /// Resolved, sorted, without duplicates.
+    pub clamp: Vec<usize>,
+    pub loads: Vec<LoadConfig>,
+    pub damping: f64,
+    pub substeps: usize,
+    pub stretch_stiffness: Option<f64>,
+    pub bending_stiffness: Option<f64>,
+    pub affinity: f64,
+    pub bending_number: Option<f64>,
+    /// Cohesive beam only: `true` for the energy-consistent force law
+    /// (`beam_forces = "energy-consistent"`), `false` for the paper's (`"paper"`).
+    pub energy_consistent: bool,
+}
+
+/// What the fibre node reads from a scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneConfig {
+    /// 2 or 3.
+    pub dimensions: u8,
+    /// `time.dt`.
+    pub dt: f64,
+    /// Whether the scene has a `[fluid]` table (then bead impulses are read).
+    pub has_fluid: bool,
+    pub fibres: Vec<FibreConfig>,
+}
+
+/// Poisson ratio used for the default shear modulus `E / (2 (1 + ν))`.
+pub const DEFAULT_POISSON_RATIO: f64 = 0.3;
+/// Default of `fibre.N.beam_forces` (`false`: "paper").
+pub const DEFAULT_ENERGY_CONSISTENT: bool = false;
+/// Largest accepted `fibre.N.beads`.
+pub const MAX_BEADS: i64 = 10_000_000;
+/// Largest accepted `fibre.N.substeps`.
+pub const MAX_SUBSTEPS: i64 = 1_000_000;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFibre {
+    model: String,
+    beads: i64,
+    bead_radius: f64,
+    youngs_modulus: f64,
+    shear_modulus: Option<f64>,
+    density: Option<f64>,
+    start: Option<[f64; 3]>,
+    direction: Option<[f64; 3]>,
+    spacing: Option<f64>,
+    #[serde(default)]
+    clamp: Vec<i64>,
+    #[serde(default)]
+    loads: Vec<RawLoad>,
+    damping: Option<f64>,
+    substeps: Option<i64>,
+    stretch_stiffness: Option<f64>,
+    bending_stiffness: Option<f64>,
+    affinity: Option<f64>,
+    bending_number: Option<f64>,
+    beam_forces: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLoad {
+    bead: i64,
+    force: Option<[f64; 3]>,
+    torque: Option<[f64; 3]>,
+}
+
+fn fmt_vec(v: &[f64; 3]) -> String {
+    format!("[{}, {}, {}]", v[0], v[1], v[2])
+}
+
+fn positive(path: &str, v: f64) -> Result<f64, String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{path}: expected a positive number, got {v}"))
+    }
+}
+
+fn non_negative(path: &str, v: f64) -> Result<f64, String> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{path}: expected a number >= 0, got {v}"))
+    }
+}
+
+fn finite(path: &str, v: f64) -> Result<f64, String> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{path}: expected a finite number, got {v}"))
+    }
+}
+
+fn finite_vec(path: &str, v: [f64; 3]) -> Result<[f64; 3], String> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{path}: expected three finite numbers, got {}",
+            fmt_vec(&v)
+        ))
+    }
+}
+
+fn planar_vec(path: &str, v: [f64; 3], dims: u8) -> Result<[f64; 3], String> {
+    if dims == 2 && v[2] != 0.0 {
+        Err(format!(
+            "{path}: a 2D scene lies in the x-y plane, expected z = 0, got {}",
+            fmt_vec(&v)
+        ))
+    } else {
+        Ok(v)
+    }
+}
+
+/// Resolve a bead index (negative counts from the end).
+fn bead_index(path: &str, index: i64, beads: usize) -> Result<usize, String> {
+    let n = beads as i64;
+    let resolved = if index < 0 { index + n } else { index };
+    if (0..n).contains(&resolved) {
+        Ok(resolved as usize)
+    } else {
+        Err(format!(
+            "{path}: bead index {index} is out of range for a fibre of {beads} beads (expected -{beads}..={})",
+            n - 1
+        ))
+    }
+}
+
+/// Turn a serde error at `path` (relative to `prefix`) into a user message.
+fn serde_message(prefix: &str, path: &serde_path_to_error::Path, msg: &str) -> String {
+    let mut full = prefix.to_string();
+    for seg in path.iter() {
+        match seg {
+            serde_path_to_error::Segment::Seq { index } => full.push_str(&format!(".{index}")),
+            serde_path_to_error::Segment::Map { key } => full.push_str(&format!(".{key}")),
+            serde_path_to_error::Segment::Enum { variant } => full.push_str(&format!(".{variant}")),
+            serde_path_to_error::Segment::Unknown => {}
+        }
+    }
+    // toml appends "in `key`" lines; the first line is serde's message.
+    let msg = msg.lines().next().unwrap_or("").trim_end();
+    let quoted = msg.split('`').nth(1).unwrap_or("");
+    if msg.starts_with("unknown field ") {
+        // "unknown field `foo`, expected one of `a`, `b`": the path ends at the key itself;
+        // report the table holding it.
+        let table = full
+            .strip_suffix(&format!(".{quoted}"))
+            .unwrap_or(&full)
+            .to_string();
+        let expected = msg
+            .split_once(", expected ")
+            .map(|(_, e)| format!(" (expected {e})"))
+            .unwrap_or_default();
+        return format!("{table}: unknown key `{quoted}`{expected}");
+    }
+    if msg.starts_with("missing field ") {
+        return format!("{full}.{quoted}: required key is missing");
+    }
+    let msg = msg
+        .replace("expected f64", "expected a number")
+        .replace("expected i64", "expected an integer")
+        .replace("expected an array of length 3", "expected [x, y, z]")
+        .replace("expected a sequence", "expected an array");
+    format!("{full}: {msg}")
+}
+
+fn deserialize<T: for<'de> Deserialize<'de>>(prefix: &str, v: toml::Value) -> Result<T, String> {
+    serde_path_to_error::deserialize(v).map_err(|e| {
+        let path = e.path().clone();
+        let inner = e.into_inner();
+        serde_message(prefix, &path, &inner.to_string())
+    })
+}
+
+fn describe_toml(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => format!("the string {s:?}"),
+        toml::Value::Table(_) => "a table".into(),
+        toml::Value::Array(_) => "an array".into(),
+        other => other.to_string(),
+    }
+}
+
+/// Read the fibre node's part of a scene.
+pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
+    let table: toml::Table = scene_toml
+        .parse()
+        .map_err(|e: toml::de::Error| format!("the scene is not valid TOML: {e}"))?;
+
+    let dimensions = match table.get("dimensions") {
+        None => 3,
+        Some(toml::Value::Integer(2)) => 2,
+        Some(toml::Value::Integer(3)) => 3,
+        Some(v) => {
+            return Err(format!(
+                "dimensions: expected 2 or 3, got {}",
+                describe_toml(v)
+            ))
+        }
+    };
+
+    let dt = match table.get("time") {
+        None => return Err("time.dt: required key is missing (no [time] table)".into()),
+        Some(toml::Value::Table(t)) => match t.get("dt") {
+            None => return Err("time.dt: required key is missing".into()),
+            Some(toml::Value::Float(x)) => positive("time.dt", *x)?,
+            Some(toml::Value::Integer(i)) => positive("time.dt", *i as f64)?,
+            Some(v) => {
+                return Err(format!(
+                    "time.dt: expected a positive number, got {}",
+                    describe_toml(v)
+                ))
+            }
+        },
+        Some(v) => return Err(format!("time: expected a table, got {}", describe_toml(v))),
+    };
+
+    let has_fluid = table.contains_key("fluid");
+
+    let list = match table.get("fibre") {
+        None => return Err(
+            "fibre: the scene has no [[fibre]] table, so the fibre node has nothing to simulate"
+                .into(),
+        ),
+        Some(toml::Value::Array(a)) => a.clone(),
+        Some(v) => {
+            return Err(format!(
+                "fibre: expected an array of tables ([[fibre]]), got {}",
+                describe_toml(v)
+            ))
+        }
+    };
+    if list.is_empty() {
+        return Err("fibre: the scene's fibre list is empty".into());
+    }
+
+    let mut fibres = Vec::with_capacity(list.len());
+    for (n, v) in list.into_iter().enumerate() {
+        let prefix = format!("fibre.{n}");
+        if !v.is_table() {
+            return Err(format!(
+                "{prefix}: expected a table, got {}",
+                describe_toml(&v)
+            ));
+        }
+        let raw: RawFibre = deserialize(&prefix, v)?;
+        fibres.push(validate_fibre(&prefix, raw, dimensions)?);
+    }
+
+    Ok(SceneConfig {
+        dimensions,
+        dt,
+        has_fluid,
+        fibres,
+    })
+}
+
+fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, String> {
+    let model = match raw.model.as_str() {
+        "cohesive-beam" => ModelKind::CohesiveBeam,
+        "bead-spring" => ModelKind::BeadSpring,
+        other => {
+            return Err(format!(
+                "{p}.model: expected \"cohesive-beam\" or \"bead-spring\", got {other:?}"
+            ))
+        }
+    };
+    if raw.beads < 2 {
+        return Err(format!(
+            "{p}.beads: expected at least 2 beads, got {}",
+            raw.beads
+        ));
+    }
+    if raw.beads > MAX_BEADS {
+        return Err(format!(
+            "{p}.beads: expected at most {MAX_BEADS} beads, got {}",
+            raw.beads
+        ));
+    }
+    let beads = raw.beads as usize;
+    let bead_radius = positive(&format!("{p}.bead_radius"), raw.bead_radius)?;
+    let youngs_modulus = positive(&format!("{p}.youngs_modulus"), raw.youngs_modulus)?;
+    let shear_modulus = match raw.shear_modulus {
+        Some(g) => positive(&format!("{p}.shear_modulus"), g)?,
+        None => youngs_modulus / (2.0 * (1.0 + DEFAULT_POISSON_RATIO)),
+    };
+    let density = match raw.density {
+        Some(x) => positive(&format!("{p}.density"), x)?,
+        None => 1.0,
+    };
+    let start = finite_vec(&format!("{p}.start"), raw.start.unwrap_or([0.0; 3]))?;
+    let start = planar_vec(&format!("{p}.start"), start, dims)?;
+    let dpath = format!("{p}.direction");
+    let d = finite_vec(&dpath, raw.direction.unwrap_or([1.0, 0.0, 0.0]))?;
+    let d = planar_vec(&dpath, d, dims)?;
+    let norm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if !(norm > 0.0 && norm.is_finite()) {
+        return Err(format!(
+            "{dpath}: expected a non-zero vector, got {}",
+            fmt_vec(&d)
+        ));
+    }
+    let direction = [d[0] / norm, d[1] / norm, d[2] / norm];
+    let spacing = match raw.spacing {
+        Some(s) => positive(&format!("{p}.spacing"), s)?,
+        None => 2.0 * bead_radius,
+    };
+    let mut clamp = Vec::with_capacity(raw.clamp.len());
+    for &c in &raw.clamp {
+        clamp.push(bead_index(&format!("{p}.clamp"), c, beads)?);
+    }
+    clamp.sort_unstable();
+    clamp.dedup();
+    let mut loads = Vec::with_capacity(raw.loads.len());
+    for (k, l) in raw.loads.iter().enumerate() {
+        let lp = format!("{p}.loads.{k}");
+        let bead = bead_index(&format!("{lp}.bead"), l.bead, beads)?;
+        let force = finite_vec(&format!("{lp}.force"), l.force.unwrap_or([0.0; 3]))?;
+        let force = planar_vec(&format!("{lp}.force"), force, dims)?;
+        let torque = finite_vec(&format!("{lp}.torque"), l.torque.unwrap_or([0.0; 3]))?;
+        if dims == 2 && (torque[0] != 0.0 || torque[1] != 0.0) {
+            return Err(format!(
+                "{lp}.torque: a 2D scene turns only about z, expected [0, 0, tz], got {}",
+                fmt_vec(&torque)
+            ));
+        }
+        if model == ModelKind::BeadSpring && torque != [0.0; 3] {
+            return Err(format!(
+                "{lp}.torque: the bead-spring model has no elastic bead rotation, expected [0, 0, 0], got {}",
+                fmt_vec(&torque)
+            ));
+        }
+        loads.push(LoadConfig {
+            bead,
+            force,
+            torque,
+        });
+    }
+    let damping = match raw.damping {
+        Some(c) => non_negative(&format!("{p}.damping"), c)?,
+        None => 0.0,
+    };
+    let substeps = match raw.substeps {
+        None => 1,
+        Some(s) if (1..=MAX_SUBSTEPS).contains(&s) => s as usize,
+        Some(s) => {
+            return Err(format!(
+                "{p}.substeps: expected an integer in 1..={MAX_SUBSTEPS}, got {s}"
+            ))
+        }
+    };
+    let only_bead_spring = |key: &str, v: Option<f64>| -> Result<Option<f64>, String> {
+        match v {
+            None => Ok(None),
+            Some(_) if model != ModelKind::BeadSpring => Err(format!(
+                "{p}.{key}: only the bead-spring model reads this key (model is {:?})",
+                model.name()
+            )),
+            Some(x) => positive(&format!("{p}.{key}"), x).map(Some),
+        }
+    };
+    let stretch_stiffness = only_bead_spring("stretch_stiffness", raw.stretch_stiffness)?;
+    let bending_stiffness = only_bead_spring("bending_stiffness", raw.bending_stiffness)?;
+    let affinity = match raw.affinity {
+        Some(a) => finite(&format!("{p}.affinity"), a)?,
+        None => 0.0,
+    };
+    let bending_number = match raw.bending_number {
+        Some(b) => Some(finite(&format!("{p}.bending_number"), b)?),
+        None => None,
+    };
+    let energy_consistent = match raw.beam_forces.as_deref() {
+        None => DEFAULT_ENERGY_CONSISTENT,
+        Some(_) if model != ModelKind::CohesiveBeam => {
+            return Err(format!(
+                "{p}.beam_forces: only the cohesive-beam model reads this key (model is {:?})",
+                model.name()
+            ))
+        }
+        Some("paper") => false,
+        Some("energy-consistent") => true,
+        Some(other) => {
+            return Err(format!(
+                "{p}.beam_forces: expected \"paper\" or \"energy-consistent\", got {other:?}"
+            ))
+        }
+    };
+    Ok(FibreConfig {
+        energy_consistent,
+        model,
+        beads,
+        bead_radius,
+        youngs_modulus,
+        shear_modulus,
+        density,
+        start,
+        direction,
+        spacing,
+        clamp,
+        loads,
+        damping,
+        substeps,
+        stretch_stiffness,
+        bending_stiffness,
+        affinity,
+        bending_number,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BASE: &str = r#"
+dimensions = 2
+[time]
+dt = 0.1
+steps = 10
+[walls]
+velocity = [0.0, 1.0]
+[[fibre]]
+model = "cohesive-beam"
+beads = 10
+bead_radius = 1.0
+youngs_modulus = 100.0
+"#;
+
+    fn with(extra: &str) -> String {
+        format!("{BASE}{extra}\n")
+    }
+
+    fn err(scene: &str) -> String {
+        match parse_scene(scene) {
+            Ok(_) => panic!("accepted:\n{scene}"),
+            Err(e) => e,
+        }
+    }
+
+    #[test]
+    fn defaults() {
+        let s = parse_scene(BASE).unwrap();
+        assert_eq!(s.dimensions, 2);
+        assert_eq!(s.dt, 0.1);
+        assert!(!s.has_fluid);
+        let f = &s.fibres[0];
+        assert_eq!(f.model, ModelKind::CohesiveBeam);
+        assert_eq!(f.beads, 10);
+        assert_eq!(f.spacing, 2.0);
+        assert_eq!(f.density, 1.0);
+        assert_eq!(f.direction, [1.0, 0.0, 0.0]);
+        assert!((f.shear_modulus - 100.0 / 2.6).abs() < 1e-12);
+        assert_eq!(f.substeps, 1);
+        assert!(f.clamp.is_empty() && f.loads.is_empty());
+    }
+
+    #[test]
+    fn full_table_and_fluid() {
+        let s = parse_scene(&with(
+            r#"shear_modulus = 40
+density = 2.5
+start = [1, 2, 0]
+direction = [0, 2, 0]
+spacing = 2.5
+clamp = [0, -1, 0]
+loads = [{ bead = -1, force = [0, -1, 0] }, { bead = 3, torque = [0, 0, 0.5] }]
+damping = 0.1
+substeps = 4
+affinity = 0.2
+bending_number = 3.0
+[fluid]
+method = "spm"
+"#,
+        ))
+        .unwrap();
+        assert!(s.has_fluid);
+        let f = &s.fibres[0];
+        assert_eq!(f.direction, [0.0, 1.0, 0.0]);
+        assert_eq!(f.clamp, vec![0, 9]);
+        assert_eq!(f.loads[0].bead, 9);
+        assert_eq!(f.loads[1].torque, [0.0, 0.0, 0.5]);
+        assert_eq!(f.substeps, 4);
+        assert_eq!(f.bending_number, Some(3.0));
+    }
+
+    #[test]
+    fn refusals_name_the_key_the_value_and_what_was_expected() {
+        let cases: &[(&str, &str)] = &[
+            (
+                "clamp = [12]",
+                "fibre.0.clamp: bead index 12 is out of range for a fibre of 10 beads (expected -10..=9)",
+            ),
+            ("clamp = [-11]", "fibre.0.clamp: bead index -11"),
+            ("foo = 1", "fibre.0: unknown key `foo`"),
+            ("damping = -1", "fibre.0.damping: expected a number >= 0, got -1"),
+            ("substeps = 0", "fibre.0.substeps: expected an integer in 1..=1000000, got 0"),
+            ("spacing = \"two\"", "fibre.0.spacing: invalid type: string \"two\""),
+            ("direction = [0, 0, 0]", "fibre.0.direction: expected a non-zero vector"),
+            ("direction = [1, 0, 1]", "fibre.0.direction: a 2D scene"),
+            ("direction = [1, 0]", "fibre.0.direction"),
+            ("start = [0, 0, 1]", "fibre.0.start: a 2D scene"),
+            ("density = nan", "fibre.0.density: expected a positive number, got NaN"),
+            ("shear_modulus = inf", "fibre.0.shear_modulus: expected a positive number, got inf"),
+            ("loads = [{ bead = 10 }]", "fibre.0.loads.0.bead: bead index 10 is out of range"),
+            ("loads = [{ bead = 1, forse = [0, 1, 0] }]", "fibre.0.loads.0: unknown key `forse`"),
+            ("loads = [{ bead = 1, force = [0, 1, 1] }]", "fibre.0.loads.0.force: a 2D scene"),
+            ("loads = [{ bead = 1, torque = [1, 0, 0] }]", "fibre.0.loads.0.torque: a 2D scene"),
+            ("loads = [{ force = [0, 1, 0] }]", "fibre.0.loads.0.bead: required key is missing"),
+            ("stretch_stiffness = 3", "fibre.0.stretch_stiffness: only the bead-spring model"),
+            ("clamp = 3", "fibre.0.clamp: invalid type: integer `3`"),
+        ];
+        for (extra, want) in cases {
+            let e = err(&with(extra));
+            assert!(e.starts_with(want), "{extra}\n got: {e}\nwant: {want}");
+        }
+    }
+
+    #[test]
+    fn refusals_of_required_and_top_level_keys() {
+        let replace = |from: &str, to: &str| err(&BASE.replace(from, to));
+        assert_eq!(
+            replace("bead_radius = 1.0", "bead_radius = -1"),
+            "fibre.0.bead_radius: expected a positive number, got -1"
+        );
+        assert_eq!(
+            replace("beads = 10", "beads = 0"),
+            "fibre.0.beads: expected at least 2 beads, got 0"
+        );
+        assert!(replace("beads = 10", "beads = 2.5").starts_with("fibre.0.beads: invalid type"));
+        assert_eq!(
+            replace("beads = 10\n", ""),
+            "fibre.0.beads: required key is missing"
+        );
+        assert_eq!(
+            replace("\"cohesive-beam\"", "\"rope\""),
+            "fibre.0.model: expected \"cohesive-beam\" or \"bead-spring\", got \"rope\""
+        );
+        assert_eq!(
+            replace("dimensions = 2", "dimensions = 4"),
+            "dimensions: expected 2 or 3, got 4"
+        );
+        assert_eq!(
+            replace("dt = 0.1", "dt = 0"),
+            "time.dt: expected a positive number, got 0"
+        );
+        assert_eq!(
+            replace("dt = 0.1\n", ""),
+            "time.dt: required key is missing"
+        );
+        assert!(replace("[[fibre]]", "[fibre]").starts_with("fibre: expected an array of tables"));
+        assert!(err("dt = [").starts_with("the scene is not valid TOML"));
+        // Bead-spring refuses a torque and reads its stiffness overrides.
+        let bs = BASE.replace("cohesive-beam", "bead-spring");
+        let e = err(&format!(
+            "{bs}loads = [{{ bead = 2, torque = [0, 0, 1] }}]\n"
+        ));
+        assert!(
+            e.starts_with("fibre.0.loads.0.torque: the bead-spring model"),
+            "{e}"
+        );
+        let ok = parse_scene(&format!("{bs}bending_stiffness = 0.5\n")).unwrap();
+        assert_eq!(ok.fibres[0].bending_stiffness, Some(0.5));
+        // The second fibre is named by its index.
+        let two = format!("{BASE}\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = 1\nbead_radius = 1\nyoungs_modulus = 1\n");
+        assert_eq!(err(&two), "fibre.1.beads: expected at least 2 beads, got 1");
+    }
+
+    #[test]
+    fn never_panics_on_odd_input() {
+        let odd = [
+            "",
+            "[[fibre]]",
+            "time = 3\n[[fibre]]",
+            "[time]\ndt = 1\nfibre = 3",
+            "[time]\ndt = 1\nfibre = [1, 2]",
+            "[time]\ndt = 1\n[[fibre]]\nmodel = 3",
+            "[time]\ndt = 1\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = -9223372036854775808\nbead_radius = 1\nyoungs_modulus = 1",
+            "[time]\ndt = 1\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = 9223372036854775807\nbead_radius = 1\nyoungs_modulus = 1",
+            "[time]\ndt = 1\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = 3\nbead_radius = 1\nyoungs_modulus = 1\nclamp = [-9223372036854775808]",
+            "dimensions = \"2\"\n[time]\ndt = 1",
+        ];
+        for s in odd {
+            assert!(parse_scene(s).is_err(), "{s}");
+        }
+    }
+}
