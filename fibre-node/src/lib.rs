@@ -3,4 +3,6 @@ pub mod bead_spring;
 pub mod cohesive_beam;
 pub mod config;
 pub mod energies;
+pub mod fibre;
 pub mod quaternion;
+pub mod stability;
