@@ -1,8 +1,23 @@
 //! Lagrangian fibre models served as a co-simulation component.
+//!
+//! - [`cohesive_beam`]: L2020 cohesive beam (quaternion beads; stretch, bend, twist);
+//! - [`bead_spring`]: S2023 bead-spring chain (stretch, bend), 2D or 3D;
+//! - [`fibre`]: one fibre's state, bead mass and inertia, the split symplectic integrator;
+//! - [`stability`]: the beam-stiffness time-step limit;
+//! - [`config`]: the `[[fibre]]` part of a scene;
+//! - [`component`]: [`FibreComponent`], the [`cosim::Component`] the executable serves;
+//! - [`quaternion`]: rotation helpers (L2020 eqs. 3-4 and appendix A).
 pub mod bead_spring;
 pub mod cohesive_beam;
+pub mod component;
 pub mod config;
 pub mod energies;
 pub mod fibre;
 pub mod quaternion;
 pub mod stability;
+
+pub use component::{FibreComponent, DIAGNOSTICS};
+pub use config::{parse_scene, FibreConfig, ModelKind, SceneConfig};
+pub use energies::Energies;
+pub use fibre::Fibre;
+pub use stability::{stability_limit, StabilityLimit};

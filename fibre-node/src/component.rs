@@ -1,0 +1,907 @@
+//! The fibre node as a co-simulation component ([`cosim::Component`]).
+use crate::config::{parse_scene, SceneConfig, MAX_SUBSTEPS};
+use crate::fibre::{Fibre, Model};
+use crate::quaternion::{from_array, to_array, Vec3};
+use crate::stability::{stability_limit, SAFETY};
+use cosim::description::{ModelDescription, ParameterDescription, PortDescription};
+use cosim::{
+    effects, BeadImpulse, BeadState, Component, ComponentError, Configured, Exchange, Phase,
+    PhaseReport, Port,
+};
+use serde::{Deserialize, Serialize};
+
+/// Names of the diagnostics of every [`PhaseReport`], in their fixed order.
+pub const DIAGNOSTICS: [&str; 7] = [
+    "kinetic_energy",
+    "stretch_energy",
+    "bend_energy",
+    "twist_energy",
+    "elastic_energy",
+    "max_speed",
+    "max_net_force",
+];
+
+/// Tag of the saved-state format.
+const STATE_FORMAT: &str = "fibre-node-state/1";
+
+/// The fibre node: cohesive-beam (L2020) and bead-spring (S2023) fibres, SPM phases.
+#[derive(Default)]
+pub struct FibreComponent {
+    run: Option<Run>,
+}
+
+struct Run {
+    scene: SceneConfig,
+    fibres: Vec<Fibre>,
+    total_beads: usize,
+    /// Read hydrodynamic impulses in `FibreVelocities` (the scene has a `[fluid]` table).
+    use_impulses: bool,
+    /// The fibres' force buffers hold F(X) at the current positions.
+    forces_current: bool,
+    /// `Some(n)`: positions of step n advanced, velocities pending.
+    pending: Option<u64>,
+    states: Vec<BeadState>,
+    impulses: Vec<BeadImpulse>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct SavedState {
+    format: String,
+    beads_per_fibre: Vec<usize>,
+    pending: Option<u64>,
+    /// Per bead: position (3), orientation (4), velocity (3), angular velocity (3), as the
+    /// bit patterns of the f64 values.
+    data: Vec<u64>,
+}
+
+fn param(key: &str, unit: &str, default: Option<&str>, description: &str) -> ParameterDescription {
+    ParameterDescription {
+        key: key.into(),
+        unit: unit.into(),
+        default: default.map(Into::into),
+        description: description.into(),
+    }
+}
+
+impl FibreComponent {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The configured fibres (empty before `configure`).
+    pub fn fibres(&self) -> &[Fibre] {
+        self.run.as_ref().map_or(&[], |r| &r.fibres)
+    }
+
+    /// Mutable access to the fibres, e.g. to set an initial perturbation in a test. Marks
+    /// the cached forces stale.
+    pub fn fibres_mut(&mut self) -> &mut [Fibre] {
+        match self.run.as_mut() {
+            Some(r) => {
+                r.forces_current = false;
+                &mut r.fibres
+            }
+            None => &mut [],
+        }
+    }
+
+    /// Current bead states, all fibres concatenated in order.
+    pub fn bead_states(&self) -> Vec<BeadState> {
+        let mut out = Vec::new();
+        if let Some(r) = &self.run {
+            fill_states(&r.fibres, &mut out);
+        }
+        out
+    }
+
+    fn run_mut(&mut self) -> Result<&mut Run, ComponentError> {
+        self.run
+            .as_mut()
+            .ok_or_else(|| ComponentError::new("fibre-node: configure must come first"))
+    }
+}
+
+fn fill_states(fibres: &[Fibre], out: &mut Vec<BeadState>) {
+    out.clear();
+    for f in fibres {
+        for k in 0..f.len() {
+            out.push(BeadState {
+                position: f.pos[k].into(),
+                orientation: to_array(&f.quat[k]),
+                velocity: f.vel[k].into(),
+                angular_velocity: f.omega[k].into(),
+            });
+        }
+    }
+}
+
+impl Run {
+    fn report(&self) -> PhaseReport {
+        let mut ke = 0.0;
+        let mut e = crate::energies::Energies::default();
+        let mut vmax: f64 = 0.0;
+        let mut fmax: f64 = 0.0;
+        for f in &self.fibres {
+            ke += f.kinetic_energy();
+            e += f.energies;
+            vmax = vmax.max(f.max_speed());
+            fmax = fmax.max(f.max_net_force());
+        }
+        let values = [ke, e.stretch, e.bend, e.twist, e.total(), vmax, fmax];
+        PhaseReport {
+            diagnostics: DIAGNOSTICS
+                .iter()
+                .zip(values)
+                .map(|(n, v)| (n.to_string(), v))
+                .collect(),
+        }
+    }
+
+    fn publish(&mut self, step: u64, exchange: &mut dyn Exchange) -> Result<(), ComponentError> {
+        fill_states(&self.fibres, &mut self.states);
+        exchange.publish_states(Port::BeadStates, step, &self.states)?;
+        Ok(())
+    }
+}
+
+impl Component for FibreComponent {
+    fn describe(&self) -> ModelDescription {
+        let len = "length";
+        ModelDescription {
+            name: "fibre-node".into(),
+            version: env!("CARGO_PKG_VERSION").into(),
+            summary: "Lagrangian fibres as chains of beads: L2020 cohesive beam (quaternions; \
+                      stretch, bend, twist) and S2023 bead-spring, 2D or 3D"
+                .into(),
+            kind: "fibre".into(),
+            models: vec!["cohesive-beam".into(), "bead-spring".into()],
+            coupling_schemes: vec!["none".into(), "spm".into()],
+            effects: vec![
+                effects::BEAM_ELASTICITY.into(),
+                effects::TWIST.into(),
+                effects::BEAD_ROTATION.into(),
+                effects::EXTERNAL_LOADS.into(),
+                effects::CLAMP.into(),
+                effects::DAMPING.into(),
+            ],
+            phases: vec![Phase::FibrePositions, Phase::FibreVelocities],
+            parameters: vec![
+                param("dimensions", "1", Some("3"), "2 (x-y plane, rotation about z, no twist) or 3"),
+                param("time.dt", "time", None, "fluid (outer) time step; the fibre takes fibre.N.substeps internal steps per dt"),
+                param("fibre.N.model", "1", None, "\"cohesive-beam\" (L2020) or \"bead-spring\" (S2023)"),
+                param("fibre.N.beads", "1", None, "number of beads N_b (at least 2)"),
+                param("fibre.N.bead_radius", len, None, "bead radius r_b"),
+                param("fibre.N.youngs_modulus", "mass / (length time^2)", None, "Young's modulus E; EI with I = pi r_b^4 / 4"),
+                param("fibre.N.shear_modulus", "mass / (length time^2)", Some("E / 2.6"), "shear modulus G (torsion, cohesive beam in 3D); default E / (2 (1 + 0.3))"),
+                param("fibre.N.density", "mass / length^3", Some("1.0"), "bead density; 3D sphere m = rho 4/3 pi r^3, 2D disc of unit thickness m = rho pi r^2"),
+                param("fibre.N.start", len, Some("[0.0, 0.0, 0.0]"), "position of bead 0"),
+                param("fibre.N.direction", "1", Some("[1.0, 0.0, 0.0]"), "direction of the straight initial fibre (normalised; z = 0 in 2D)"),
+                param("fibre.N.spacing", len, Some("2 bead_radius"), "initial and rest distance between neighbouring beads"),
+                param("fibre.N.clamp", "1", Some("[]"), "indices of clamped beads (negative counts from the end): fixed position and orientation"),
+                param("fibre.N.loads", "1", Some("[]"), "constant point loads: tables { bead, force, torque }"),
+                param("fibre.N.loads.M.bead", "1", None, "bead index (negative counts from the end)"),
+                param("fibre.N.loads.M.force", "mass length / time^2", Some("[0.0, 0.0, 0.0]"), "force, laboratory frame"),
+                param("fibre.N.loads.M.torque", "mass length^2 / time^2", Some("[0.0, 0.0, 0.0]"), "torque, laboratory frame (cohesive beam only)"),
+                param("fibre.N.damping", "1 / time", Some("0.0"), "damping rate c: F = -c m V, T = -c I Omega"),
+                param("fibre.N.substeps", "1", Some("1"), "internal fibre steps per time.dt"),
+                param("fibre.N.stretch_stiffness", "mass length^2 / time^2", Some("E pi r^2 l0"), "bead-spring k_s (spring stiffness k_s / l0^2)"),
+                param("fibre.N.bending_stiffness", "mass length^2 / time^2", Some("E I / l0"), "bead-spring k_b (U_b = -k_b sum t_i+1 . t_i)"),
+                param("fibre.N.affinity", "1", Some("0.0"), "wetting affinity psi0 of the fibre (read by the fluid node)"),
+                param("fibre.N.bending_number", "1", None, "bending number (recorded, not used by the fibre node)"),
+                param("fibre.N.beam_forces", "1", Some("\"paper\""), "cohesive beam: \"paper\" (L2020 eqs. 11-24) or \"energy-consistent\" (the same to leading order, exactly conservative to third order in the bead angles)"),
+            ],
+            inputs: vec![PortDescription {
+                port: Port::BeadImpulses,
+                record: "BeadImpulse".into(),
+                description: "time-integrated hydrodynamic force and torque per bead, read in \
+                              fibre-velocities when the scene has a [fluid] table"
+                    .into(),
+            }],
+            outputs: vec![PortDescription {
+                port: Port::BeadStates,
+                record: "BeadState".into(),
+                description: "all beads, fibres in order, after configure (step 0) and after \
+                              each fibre phase (step n + 1)"
+                    .into(),
+            }],
+            notes: vec![
+                "sub-cycling: with fibre.N.substeps = n the fibre takes n internal steps of \
+                 dt / n per fluid step (n position updates in fibre-positions with n - 1 \
+                 internal velocity kicks in between; the last kick, with the fluid impulses, \
+                 in fibre-velocities)"
+                    .into(),
+                "configure refuses a time step above the beam-stiffness limit \
+                 (symplectic Euler, h omega_max < 2) and says how to fix it"
+                    .into(),
+                "the FPD phases (fibre-forces, fibre-advance) are not served yet".into(),
+            ],
+        }
+    }
+
+    fn configure(
+        &mut self,
+        scene_toml: &str,
+        exchange: &mut dyn Exchange,
+    ) -> Result<Configured, ComponentError> {
+        self.run = None;
+        let scene = parse_scene(scene_toml).map_err(ComponentError)?;
+        let mut fibres = Vec::with_capacity(scene.fibres.len());
+        let mut limits = Vec::new();
+        let mut derived = Vec::new();
+        for (n, cfg) in scene.fibres.iter().enumerate() {
+            let f = Fibre::straight(cfg, scene.dimensions, scene.has_fluid);
+            let lim = stability_limit(&f, cfg.substeps);
+            let h = scene.dt / cfg.substeps as f64;
+            if h > lim.step_limit * SAFETY {
+                let h_ok = lim.step_limit * SAFETY;
+                let need = (scene.dt / h_ok).ceil();
+                let advice = if need <= MAX_SUBSTEPS as f64 {
+                    format!(" or raise fibre.{n}.substeps to at least {need}")
+                } else {
+                    String::new()
+                };
+                return Err(ComponentError(format!(
+                    "time step too large for fibre.{n} (beam stiffness limit): \
+                     time.dt / fibre.{n}.substeps = {} / {} = {h:.6e} exceeds the stable fibre step \
+                     {h_ok:.6e} (symplectic Euler, omega_max = {:.6e}, damping {}, 2 % margin); \
+                     lower time.dt to at most {:.6e}{advice}",
+                    scene.dt, cfg.substeps, lim.omega_max, lim.damping, lim.dt_limit
+                )));
+            }
+            if lim.dt_limit.is_finite() {
+                limits.push((format!("beam stiffness (fibre.{n})"), lim.dt_limit));
+            }
+            let p = format!("fibre.{n}");
+            derived.push((format!("{p}.length"), cfg.spacing * (cfg.beads - 1) as f64));
+            derived.push((format!("{p}.bending_rigidity"), f.bending_rigidity()));
+            derived.push((format!("{p}.bead_mass"), f.mass));
+            derived.push((format!("{p}.bead_moment_of_inertia"), f.inertia));
+            match &f.model {
+                Model::CohesiveBeam(b) => {
+                    derived.push((format!("{p}.axial_stiffness"), b.axial));
+                    if !f.planar {
+                        derived.push((format!("{p}.torsional_rigidity"), b.twist * b.rest_length));
+                    }
+                }
+                Model::BeadSpring(b) => {
+                    derived.push((format!("{p}.stretch_stiffness"), b.k_s));
+                    derived.push((format!("{p}.bending_stiffness"), b.k_b));
+                }
+            }
+            derived.push((format!("{p}.omega_max"), lim.omega_max));
+            derived.push((format!("{p}.substeps"), cfg.substeps as f64));
+            derived.push((format!("{p}.affinity"), cfg.affinity));
+            if let Some(b) = cfg.bending_number {
+                derived.push((format!("{p}.bending_number"), b));
+            }
+            fibres.push(f);
+        }
+
+        let mut active = vec![effects::BEAM_ELASTICITY.to_string()];
+        let any = |pred: &dyn Fn(&Fibre) -> bool| fibres.iter().any(pred);
+        if any(&|f| matches!(f.model, Model::CohesiveBeam(_)) && !f.planar) {
+            active.push(effects::TWIST.into());
+        }
+        if any(&|f| f.rotates) {
+            active.push(effects::BEAD_ROTATION.into());
+        }
+        if any(&|f| !f.loads.is_empty()) {
+            active.push(effects::EXTERNAL_LOADS.into());
+        }
+        if any(&|f| f.clamped.iter().any(|&c| c)) {
+            active.push(effects::CLAMP.into());
+        }
+        if any(&|f| f.damping > 0.0) {
+            active.push(effects::DAMPING.into());
+        }
+
+        let total_beads = fibres.iter().map(|f| f.len()).sum();
+        let mut run = Run {
+            use_impulses: scene.has_fluid,
+            scene,
+            fibres,
+            total_beads,
+            forces_current: true,
+            pending: None,
+            states: Vec::with_capacity(total_beads),
+            impulses: Vec::with_capacity(total_beads),
+        };
+        run.publish(0, exchange)?;
+        let configured = Configured {
+            beads_per_fibre: run.fibres.iter().map(|f| f.len()).collect(),
+            effects: active,
+            time_step_limits: limits,
+            derived,
+        };
+        self.run = Some(run);
+        Ok(configured)
+    }
+
+    fn run_phase(
+        &mut self,
+        step: u64,
+        phase: Phase,
+        exchange: &mut dyn Exchange,
+    ) -> Result<PhaseReport, ComponentError> {
+        let run = self.run_mut()?;
+        let dt = run.scene.dt;
+        match phase {
+            Phase::FibrePositions => {
+                if let Some(p) = run.pending {
+                    return Err(ComponentError(format!(
+                        "fibre-node: fibre-positions of step {step} requested while the \
+                         velocities of step {p} are still pending"
+                    )));
+                }
+                for f in run.fibres.iter_mut() {
+                    f.advance_positions(dt);
+                }
+                run.forces_current = true;
+                run.pending = Some(step);
+            }
+            Phase::FibreVelocities => {
+                if run.pending != Some(step) {
+                    return Err(ComponentError(format!(
+                        "fibre-node: fibre-velocities of step {step} requested before \
+                         fibre-positions of step {step}"
+                    )));
+                }
+                let impulses = if run.use_impulses {
+                    exchange.read_impulses(Port::BeadImpulses, &mut run.impulses)?;
+                    if run.impulses.len() != run.total_beads {
+                        return Err(ComponentError(format!(
+                            "fibre-node: {} bead impulses received for {} beads",
+                            run.impulses.len(),
+                            run.total_beads
+                        )));
+                    }
+                    Some(&run.impulses[..])
+                } else {
+                    None
+                };
+                let mut offset = 0;
+                for f in run.fibres.iter_mut() {
+                    let n = f.len();
+                    f.advance_velocities(
+                        dt,
+                        impulses.map(|j| &j[offset..offset + n]),
+                        run.forces_current,
+                    );
+                    offset += n;
+                }
+                run.forces_current = true;
+                run.pending = None;
+            }
+            other => {
+                return Err(ComponentError(format!(
+                    "fibre-node does not serve phase {other} (it serves fibre-positions and \
+                     fibre-velocities; the FPD coupling is not implemented yet)"
+                )))
+            }
+        }
+        run.publish(step + 1, exchange)?;
+        Ok(run.report())
+    }
+
+    fn save_state(&self) -> Result<Vec<u8>, ComponentError> {
+        let run = self
+            .run
+            .as_ref()
+            .ok_or_else(|| ComponentError::new("fibre-node: nothing to save before configure"))?;
+        let mut data = Vec::with_capacity(13 * run.total_beads);
+        for f in &run.fibres {
+            for k in 0..f.len() {
+                let q = to_array(&f.quat[k]);
+                let vals = [
+                    f.pos[k].x,
+                    f.pos[k].y,
+                    f.pos[k].z,
+                    q[0],
+                    q[1],
+                    q[2],
+                    q[3],
+                    f.vel[k].x,
+                    f.vel[k].y,
+                    f.vel[k].z,
+                    f.omega[k].x,
+                    f.omega[k].y,
+                    f.omega[k].z,
+                ];
+                data.extend(vals.iter().map(|v| v.to_bits()));
+            }
+        }
+        let saved = SavedState {
+            format: STATE_FORMAT.into(),
+            beads_per_fibre: run.fibres.iter().map(|f| f.len()).collect(),
+            pending: run.pending,
+            data,
+        };
+        serde_json::to_vec(&saved)
+            .map_err(|e| ComponentError(format!("fibre-node: cannot serialise the state: {e}")))
+    }
+
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), ComponentError> {
+        let saved: SavedState = serde_json::from_slice(state)
+            .map_err(|e| ComponentError(format!("fibre-node: not a saved fibre state: {e}")))?;
+        let run = self.run.as_mut().ok_or_else(|| {
+            ComponentError::new(
+                "fibre-node: configure with the same scene before restoring a state",
+            )
+        })?;
+        if saved.format != STATE_FORMAT {
+            return Err(ComponentError(format!(
+                "fibre-node: saved state has format {:?}, expected {STATE_FORMAT:?}",
+                saved.format
+            )));
+        }
+        let have: Vec<usize> = run.fibres.iter().map(|f| f.len()).collect();
+        if saved.beads_per_fibre != have || saved.data.len() != 13 * run.total_beads {
+            return Err(ComponentError(format!(
+                "fibre-node: saved state has beads per fibre {:?}, the configured scene has {have:?}",
+                saved.beads_per_fibre
+            )));
+        }
+        let mut it = saved.data.iter().map(|b| f64::from_bits(*b));
+        let mut next = || it.next().unwrap_or(0.0);
+        for f in run.fibres.iter_mut() {
+            for k in 0..f.len() {
+                f.pos[k] = Vec3::new(next(), next(), next());
+                f.quat[k] = from_array([next(), next(), next(), next()]);
+                f.vel[k] = Vec3::new(next(), next(), next());
+                f.omega[k] = Vec3::new(next(), next(), next());
+            }
+            f.compute_forces();
+        }
+        run.forces_current = true;
+        run.pending = saved.pending;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quaternion::rotation_angle;
+    use cosim::InProcessExchange;
+    use std::f64::consts::PI;
+
+    /// Configure, and return the component with the exchange it publishes to.
+    fn configure(scene: &str) -> (FibreComponent, InProcessExchange, Configured) {
+        let mut c = FibreComponent::new();
+        let mut x = InProcessExchange::new();
+        let cfg = c.configure(scene, &mut x).unwrap_or_else(|e| panic!("{e}"));
+        (c, x, cfg)
+    }
+
+    /// Largest stable dt of a scene (configure with a tiny dt and read the limit back).
+    fn dt_limit(scene_without_time: &str) -> f64 {
+        let (_, _, cfg) = configure(&format!("[time]\ndt = 1e-12\n{scene_without_time}"));
+        cfg.time_step_limits
+            .iter()
+            .map(|(_, v)| *v)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    fn step(c: &mut FibreComponent, x: &mut InProcessExchange, n: u64) -> PhaseReport {
+        c.run_phase(n, Phase::FibrePositions, x).unwrap();
+        c.run_phase(n, Phase::FibreVelocities, x).unwrap()
+    }
+
+    fn diag(r: &PhaseReport, name: &str) -> f64 {
+        r.diagnostics.iter().find(|(n, _)| n == name).unwrap().1
+    }
+
+    /// Run a damped scene until the largest net force is below `tol`; return the component
+    /// and the last report.
+    fn to_rest(body: &str, tol: f64) -> (FibreComponent, PhaseReport) {
+        let dt = 0.9 * dt_limit(body);
+        let (mut c, mut x, _) = configure(&format!("[time]\ndt = {dt}\n{body}"));
+        let mut r = PhaseReport::default();
+        for n in 0..5_000_000 {
+            r = step(&mut c, &mut x, n);
+            if n % 100 == 99 && diag(&r, "max_net_force") < tol {
+                eprintln!("  at rest after {} steps", n + 1);
+                return (c, r);
+            }
+        }
+        panic!("not at rest: {r:?}");
+    }
+
+    /// Fundamental bending frequency of a cantilever: 1.875² sqrt(EI / (mu L⁴)).
+    fn cantilever_omega1(ei: f64, mass: f64, l0: f64, length: f64) -> f64 {
+        1.875f64.powi(2) * (ei / (mass / l0 * length.powi(4))).sqrt()
+    }
+
+    struct Cantilever {
+        dims: u8,
+        model: &'static str,
+        beads: usize,
+        alpha: f64,
+        clamp: &'static str,
+        /// Load direction (unit, perpendicular to e_x).
+        dir: [f64; 3],
+        forces: &'static str,
+    }
+
+    /// Tip deflection over L (L = 2 (N_b − 1) r_b), the tip rotation, and the length.
+    fn cantilever(cfg: &Cantilever) -> (f64, f64, f64) {
+        let (r, e, rho): (f64, f64, f64) = (1.0, 1.0, 1.0);
+        let ei = e * PI * r.powi(4) / 4.0;
+        let length = 2.0 * (cfg.beads - 1) as f64 * r;
+        let p = cfg.alpha * ei / (length * length);
+        let (m, _) = crate::fibre::bead_mass_inertia(rho, r, cfg.dims == 2);
+        let w1 = cantilever_omega1(ei, m, 2.0 * r, length);
+        let body = format!(
+            "dimensions = {}\n[[fibre]]\nmodel = \"{}\"\nbeads = {}\nbead_radius = {r}\nyoungs_modulus = {e}\ndensity = {rho}\nclamp = {}\ndamping = {}\nloads = [{{ bead = -1, force = [{}, {}, {}] }}]\n{}\n",
+            cfg.dims,
+            cfg.model,
+            cfg.beads,
+            cfg.clamp,
+            2.0 * w1,
+            p * cfg.dir[0],
+            p * cfg.dir[1],
+            p * cfg.dir[2],
+            cfg.forces,
+        );
+        let (c, _) = to_rest(&body, 1e-9 * p);
+        let f = &c.fibres()[0];
+        let tip = f.pos[f.len() - 1] - f.pos[0];
+        let defl = tip.y * cfg.dir[1] + tip.z * cfg.dir[2];
+        (defl / length, rotation_angle(&f.quat[f.len() - 1]), length)
+    }
+
+    #[test]
+    fn small_deflection_cantilever_2d_matches_alpha_over_3() {
+        for beads in [5, 10] {
+            let (d, _, _) = cantilever(&Cantilever {
+                dims: 2,
+                model: "cohesive-beam",
+                beads,
+                alpha: 0.1,
+                clamp: "[0]",
+                dir: [0.0, -1.0, 0.0],
+                forces: "",
+            });
+            let rel = (d - 0.1 / 3.0).abs() / (0.1 / 3.0);
+            eprintln!(
+                "cohesive beam 2D N_b = {beads}: delta/L = {d:.6}, alpha/3 = {:.6}, rel {rel:.2e}",
+                0.1 / 3.0
+            );
+            assert!(rel < 0.02);
+        }
+    }
+
+    /// Elastica reference (REFERENCE.md §1; recomputed by shooting to 6 digits):
+    /// alpha, delta_v / L, tip rotation.
+    const ELASTICA: [(f64, f64, f64); 4] = [
+        (1.0, 0.301721, 0.461352),
+        (2.0, 0.493457, 0.781750),
+        (5.0, 0.713792, 1.215368),
+        (10.0, 0.810609, 1.430286),
+    ];
+
+    #[test]
+    fn large_deflection_cantilever_converges_to_the_elastica() {
+        // The error falls as 1/N_b² (L2020: N_b >= 10 needed for large deflections).
+        for (beads, tol) in [(10, 0.012), (20, 0.003)] {
+            for (alpha, dv, rot) in ELASTICA {
+                let (d, r, _) = cantilever(&Cantilever {
+                    dims: 2,
+                    model: "cohesive-beam",
+                    beads,
+                    alpha,
+                    clamp: "[0]",
+                    dir: [0.0, -1.0, 0.0],
+                    forces: "",
+                });
+                let (ed, er) = ((d - dv) / dv, (r - rot) / rot);
+                eprintln!("N_b {beads} alpha {alpha}: delta_v/L {d:.5} ({ed:+.2e}), tip rotation {r:.5} ({er:+.2e})");
+                assert!(ed.abs() < tol && er.abs() < tol);
+            }
+        }
+    }
+
+    #[test]
+    fn bead_spring_cantilever_matches_the_discrete_beam() {
+        // Clamping beads 0 and 1 clamps the first tangent. Joint k (bead k = 1..N-2) is a
+        // rotational spring k_b = E I / l0 carrying the moment P (N − 1 − k) l0, so
+        // delta = P l0³ M (M + 1) (2M + 1) / (6 E I), M = N_b − 2, i.e. P L³ / (3 E I) with
+        // L³ = l0³ M (M + 1)(2M + 1) / 2 ≈ ((N_b − 3/2) l0)³: the effective length runs
+        // from the middle of the clamped segment to the tip bead.
+        for (beads, tol_eff) in [(5, 0.025), (10, 0.006), (20, 0.003)] {
+            let (d, _, length) = cantilever(&Cantilever {
+                dims: 2,
+                model: "bead-spring",
+                beads,
+                alpha: 0.1,
+                clamp: "[0, 1]",
+                dir: [0.0, -1.0, 0.0],
+                forces: "",
+            });
+            let (ei, l0): (f64, f64) = (PI / 4.0, 2.0);
+            let p = 0.1 * ei / (length * length);
+            let delta = d * length;
+            let m = beads as f64 - 2.0;
+            let discrete = p * l0.powi(3) * m * (m + 1.0) * (2.0 * m + 1.0) / (6.0 * ei);
+            let l_eff = (beads as f64 - 1.5) * l0;
+            let continuum = p * l_eff.powi(3) / (3.0 * ei);
+            eprintln!(
+                "bead-spring N_b {beads}: delta / discrete {:.5}, delta / (P L_eff³/3EI) {:.5}, delta / (P L³/3EI) with L = (N_b-1) l0 {:.5}",
+                delta / discrete,
+                delta / continuum,
+                delta / (p * length.powi(3) / (3.0 * ei))
+            );
+            // the remaining 0.1 % is the geometric nonlinearity at alpha = 0.1
+            assert!((delta / discrete - 1.0).abs() < 2e-3);
+            assert!((delta / continuum - 1.0).abs() < tol_eff);
+        }
+    }
+
+    #[test]
+    fn out_of_plane_cantilever_equals_in_plane() {
+        let run = |dir| {
+            cantilever(&Cantilever {
+                dims: 3,
+                model: "cohesive-beam",
+                beads: 10,
+                alpha: 0.1,
+                clamp: "[0]",
+                dir,
+                forces: "",
+            })
+        };
+        let (dy, ry, _) = run([0.0, -1.0, 0.0]);
+        let (dz, rz, _) = run([0.0, 0.0, -1.0]);
+        eprintln!("3D: in-plane {dy:.12}, out-of-plane {dz:.12}");
+        assert!((dy - dz).abs() <= 1e-9 * dy);
+        assert!((ry - rz).abs() <= 1e-9 * ry);
+        assert!((dy - 0.1 / 3.0).abs() < 0.02 * 0.1 / 3.0);
+    }
+
+    #[test]
+    fn torsion_matches_tl_over_gj() {
+        for (beads, phi) in [(5, 0.05), (10, 0.05), (10, 1.0)] {
+            let (r, e, rho): (f64, f64, f64) = (1.0, 1.0, 1.0);
+            let g = e / 2.6;
+            let j = PI * r.powi(4) / 2.0;
+            let length = 2.0 * (beads - 1) as f64 * r;
+            let t = phi * g * j / length;
+            let (_, inertia) = crate::fibre::bead_mass_inertia(rho, r, false);
+            let w1 = PI / (2.0 * length) * (g * j * 2.0 * r / inertia).sqrt();
+            let body = format!(
+                "[[fibre]]\nmodel = \"cohesive-beam\"\nbeads = {beads}\nbead_radius = {r}\nyoungs_modulus = {e}\ndensity = {rho}\nclamp = [0]\ndamping = {}\nloads = [{{ bead = -1, torque = [{t}, 0, 0] }}]\n",
+                2.0 * w1
+            );
+            let dt = 0.9 * dt_limit(&body);
+            let (mut c, mut x, _) = configure(&format!("[time]\ndt = {dt}\n{body}"));
+            let mut n = 0;
+            loop {
+                let rep = step(&mut c, &mut x, n);
+                n += 1;
+                if n % 100 == 0 && diag(&rep, "kinetic_energy") < 1e-24 * t * phi {
+                    break;
+                }
+                assert!(n < 2_000_000, "not at rest");
+            }
+            let f = &c.fibres()[0];
+            let q = f.quat[beads - 1];
+            let twist = 2.0 * q.i.atan2(q.w);
+            let rel = (twist - phi).abs() / phi;
+            eprintln!("torsion N_b {beads}: twist {twist:.6} vs T L / (G J) = {phi} ({rel:.1e}) after {n} steps");
+            assert!(rel < 0.02);
+            // pure twist: the axis stays straight
+            assert!((f.pos[beads - 1] - f.pos[0] - Vec3::new(length, 0.0, 0.0)).norm() < 1e-9);
+        }
+    }
+
+    fn bits(states: &[BeadState]) -> Vec<u64> {
+        states
+            .iter()
+            .flat_map(|s| {
+                s.position
+                    .iter()
+                    .chain(&s.orientation)
+                    .chain(&s.velocity)
+                    .chain(&s.angular_velocity)
+                    .map(|v| v.to_bits())
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn save_restore_is_bit_identical() {
+        let scene = "[time]\ndt = 0.05\n[[fibre]]\nmodel = \"cohesive-beam\"\nbeads = 8\nbead_radius = 1\nyoungs_modulus = 1\nclamp = [0]\ndamping = 0.01\nsubsteps = 3\nloads = [{ bead = -1, force = [0, -0.01, 0.005], torque = [0.002, 0, 0] }]\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = 5\nbead_radius = 1\nyoungs_modulus = 1\nstart = [0, 10, 0]\nloads = [{ bead = 2, force = [0.001, 0.01, 0] }]\n";
+        let (mut a, mut xa, _) = configure(scene);
+        let mut saved = Vec::new();
+        let mut saved_mid = Vec::new();
+        for n in 0..200 {
+            if n == 100 {
+                saved = a.save_state().unwrap();
+            }
+            a.run_phase(n, Phase::FibrePositions, &mut xa).unwrap();
+            if n == 150 {
+                saved_mid = a.save_state().unwrap();
+            }
+            a.run_phase(n, Phase::FibreVelocities, &mut xa).unwrap();
+        }
+        let end = bits(&a.bead_states());
+        // restore at a step boundary
+        let (mut b, mut xb, _) = configure(scene);
+        b.restore_state(&saved).unwrap();
+        let mut last = PhaseReport::default();
+        for n in 100..200 {
+            last = step(&mut b, &mut xb, n);
+        }
+        assert_eq!(bits(&b.bead_states()), end);
+        let mut out = Vec::new();
+        xb.read_states(Port::BeadStates, &mut out).unwrap();
+        assert_eq!(bits(&out), end);
+        assert!(diag(&last, "kinetic_energy") > 0.0);
+        // restore between the two phases of a step
+        let (mut c, mut xc, _) = configure(scene);
+        c.restore_state(&saved_mid).unwrap();
+        assert!(c.run_phase(150, Phase::FibrePositions, &mut xc).is_err());
+        c.run_phase(150, Phase::FibreVelocities, &mut xc).unwrap();
+        for n in 151..200 {
+            step(&mut c, &mut xc, n);
+        }
+        assert_eq!(bits(&c.bead_states()), end);
+        // a state from another scene is refused
+        let (mut d, _, _) = configure(&scene.replace("beads = 8", "beads = 9"));
+        let e = d.restore_state(&saved).unwrap_err();
+        assert!(e.0.contains("beads per fibre"), "{e}");
+        assert!(d.restore_state(b"not json").is_err());
+    }
+
+    #[test]
+    fn refuses_a_time_step_above_the_beam_stiffness_limit() {
+        let body = "[[fibre]]\nmodel = \"cohesive-beam\"\nbeads = 10\nbead_radius = 1\nyoungs_modulus = 100\n";
+        let limit = dt_limit(body);
+        let mut c = FibreComponent::new();
+        let mut x = InProcessExchange::new();
+        let e = c
+            .configure(&format!("[time]\ndt = {}\n{body}", 2.5 * limit), &mut x)
+            .unwrap_err();
+        eprintln!("{e}");
+        for want in [
+            "beam stiffness",
+            "time.dt",
+            "fibre.0.substeps",
+            "lower time.dt",
+            "at least 3",
+        ] {
+            assert!(e.0.contains(want), "missing {want:?} in: {e}");
+        }
+        // the advice works
+        let ok = format!("[time]\ndt = {}\n{body}substeps = 3\n", 2.5 * limit);
+        let cfg = c.configure(&ok, &mut x).unwrap();
+        assert!((cfg.time_step_limits[0].1 - 3.0 * limit).abs() < 1e-12 * limit);
+        // a parse error reaches the user as is
+        let e = c
+            .configure(&format!("[time]\ndt = 1e-9\n{body}clamp = [12]\n"), &mut x)
+            .unwrap_err();
+        assert_eq!(
+            e.0,
+            "fibre.0.clamp: bead index 12 is out of range for a fibre of 10 beads (expected -10..=9)"
+        );
+        assert!(c.run_phase(0, Phase::FibrePositions, &mut x).is_err());
+    }
+
+    #[test]
+    fn effects_derived_values_and_initial_publication() {
+        let base = "[time]\ndt = 1e-3\n[[fibre]]\nmodel = \"MODEL\"\nbeads = 4\nbead_radius = 2\nyoungs_modulus = 3\n";
+        let effects_of = |scene: &str| configure(scene).2.effects;
+        let cb = base.replace("MODEL", "cohesive-beam");
+        let bs = base.replace("MODEL", "bead-spring");
+        assert_eq!(
+            effects_of(&cb),
+            ["beam-elasticity", "twist", "bead-rotation"]
+        );
+        assert_eq!(
+            effects_of(&format!("dimensions = 2\n{cb}")),
+            ["beam-elasticity", "bead-rotation"]
+        );
+        assert_eq!(effects_of(&bs), ["beam-elasticity"]);
+        assert_eq!(
+            effects_of(&format!("{bs}[fluid]\nmethod = \"spm\"\n")),
+            ["beam-elasticity", "bead-rotation"]
+        );
+        assert_eq!(
+            effects_of(&format!(
+                "{cb}clamp = [0]\ndamping = 0.1\nloads = [{{ bead = -1, force = [0, 1, 0] }}]\n"
+            )),
+            [
+                "beam-elasticity",
+                "twist",
+                "bead-rotation",
+                "external-loads",
+                "clamp",
+                "damping"
+            ]
+        );
+        // zero loads are no loads
+        assert!(!effects_of(&format!("{cb}loads = [{{ bead = 1 }}]\n"))
+            .contains(&"external-loads".to_string()));
+
+        let (_, mut x, cfg) = configure(&cb);
+        assert_eq!(cfg.beads_per_fibre, vec![4]);
+        let get = |k: &str| cfg.derived.iter().find(|(n, _)| n == k).unwrap().1;
+        assert_eq!(get("fibre.0.length"), 12.0);
+        assert!((get("fibre.0.bending_rigidity") - 3.0 * PI * 16.0 / 4.0).abs() < 1e-12);
+        assert!((get("fibre.0.bead_mass") - 4.0 / 3.0 * PI * 8.0).abs() < 1e-12);
+        assert_eq!(cfg.time_step_limits[0].0, "beam stiffness (fibre.0)");
+        let mut out = Vec::new();
+        let h = x.read_states(Port::BeadStates, &mut out).unwrap();
+        assert_eq!(h.step, 0);
+        assert_eq!(out.len(), 4);
+        assert_eq!(out[3].position, [12.0, 0.0, 0.0]);
+        assert_eq!(out[3].orientation, [1.0, 0.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn phases_reports_and_impulses() {
+        let scene = "dimensions = 2\n[time]\ndt = 1e-3\n[fluid]\nmethod = \"spm\"\n[[fibre]]\nmodel = \"cohesive-beam\"\nbeads = 3\nbead_radius = 1\nyoungs_modulus = 1\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = 2\nbead_radius = 1\nyoungs_modulus = 1\n";
+        let (mut c, mut x, _) = configure(scene);
+        let mut fluid = x.clone();
+        assert!(c.run_phase(0, Phase::FibreVelocities, &mut x).is_err());
+        assert!(c.run_phase(0, Phase::FluidPenalty, &mut x).is_err());
+        assert!(c.run_phase(0, Phase::FibreForces, &mut x).is_err());
+        let r = c.run_phase(0, Phase::FibrePositions, &mut x).unwrap();
+        let names: Vec<&str> = r.diagnostics.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, DIAGNOSTICS);
+        // no impulses published yet: a clear error
+        let e = c.run_phase(0, Phase::FibreVelocities, &mut x).unwrap_err();
+        assert!(e.0.contains("bead-impulses"), "{e}");
+        // wrong count
+        fluid
+            .publish_impulses(Port::BeadImpulses, 1, &[BeadImpulse::default(); 4])
+            .unwrap();
+        assert!(c.run_phase(0, Phase::FibreVelocities, &mut x).is_err());
+        // impulses change the velocities by J/m (the fibres are straight and unloaded);
+        // out-of-plane parts are dropped in 2D
+        let mut j = [BeadImpulse::default(); 5];
+        j[1].impulse = [0.3, -0.2, 7.0];
+        j[1].angular_impulse = [1.0, 2.0, 0.5];
+        j[4].impulse = [0.0, 1.0, 0.0];
+        j[4].angular_impulse = [0.0, 0.0, 0.25];
+        fluid.publish_impulses(Port::BeadImpulses, 1, &j).unwrap();
+        let r = c.run_phase(0, Phase::FibreVelocities, &mut x).unwrap();
+        let mut out = Vec::new();
+        let h = x.read_states(Port::BeadStates, &mut out).unwrap();
+        assert_eq!(h.step, 1);
+        let (m, i) = crate::fibre::bead_mass_inertia(1.0, 1.0, true);
+        let close = |a: [f64; 3], b: [f64; 3]| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-15);
+        assert!(close(out[1].velocity, [0.3 / m, -0.2 / m, 0.0]));
+        assert!(close(out[1].angular_velocity, [0.0, 0.0, 0.5 / i]));
+        assert!(close(out[4].velocity, [0.0, 1.0 / m, 0.0]));
+        // bead-spring beads turn freely under hydrodynamic torque when a fluid is present
+        assert!(close(out[4].angular_velocity, [0.0, 0.0, 0.25 / i]));
+        assert!(diag(&r, "max_speed") > 0.0);
+        assert_eq!(diag(&r, "max_net_force"), 0.0);
+    }
+
+    #[test]
+    fn description() {
+        let d = FibreComponent::new().describe();
+        assert_eq!(d.name, "fibre-node");
+        assert_eq!(d.kind, "fibre");
+        assert_eq!(
+            d.phases,
+            vec![Phase::FibrePositions, Phase::FibreVelocities]
+        );
+        assert_eq!(d.inputs[0].port, Port::BeadImpulses);
+        assert_eq!(d.outputs[0].port, Port::BeadStates);
+        for k in [
+            "fibre.N.youngs_modulus",
+            "fibre.N.clamp",
+            "fibre.N.loads",
+            "fibre.N.substeps",
+            "time.dt",
+            "fibre.N.beam_forces",
+        ] {
+            assert!(d.parameters.iter().any(|p| p.key == k), "{k}");
+        }
+        assert!(d.render().contains("sub-cycling"));
+    }
+}
