@@ -78,7 +78,7 @@ pub const DEFAULT_POISSON_RATIO: f64 = 0.3;
 /// Default of `fibre.N.beam_forces` (`false`: "paper").
 pub const DEFAULT_ENERGY_CONSISTENT: bool = false;
 /// Largest accepted `fibre.N.beads`.
-pub const MAX_BEADS: i64 = 10_000_000;
+pub const MAX_BEADS: i64 = 1_000_000;
 /// Largest accepted `fibre.N.substeps`.
 pub const MAX_SUBSTEPS: i64 = 1_000_000;
 
@@ -560,6 +560,7 @@ method = "spm"
             ("loads = [{ force = [0, 1, 0] }]", "fibre.0.loads.0.bead: required key is missing"),
             ("stretch_stiffness = 3", "fibre.0.stretch_stiffness: only the bead-spring model"),
             ("clamp = 3", "fibre.0.clamp: invalid type: integer `3`"),
+            ("beam_forces = \"exact\"", "fibre.0.beam_forces: expected \"paper\" or \"energy-consistent\", got \"exact\""),
         ];
         for (extra, want) in cases {
             let e = err(&with(extra));
@@ -609,6 +610,17 @@ method = "spm"
         assert!(
             e.starts_with("fibre.0.loads.0.torque: the bead-spring model"),
             "{e}"
+        );
+        let e = err(&format!("{bs}beam_forces = \"paper\"\n"));
+        assert!(
+            e.starts_with("fibre.0.beam_forces: only the cohesive-beam model"),
+            "{e}"
+        );
+        assert!(
+            parse_scene(&format!("{BASE}beam_forces = \"energy-consistent\"\n"))
+                .unwrap()
+                .fibres[0]
+                .energy_consistent
         );
         let ok = parse_scene(&format!("{bs}bending_stiffness = 0.5\n")).unwrap();
         assert_eq!(ok.fibres[0].bending_stiffness, Some(0.5));
