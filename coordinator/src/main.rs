@@ -1,1 +1,172 @@
-fn main() {}
+//! Command-line interface. Every failure ends with one clear message and a non-zero exit
+//! code, never a panic trace.
+use clap::{Parser, Subcommand};
+use coordinator::{runner, scene, study};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "coordinator",
+    version,
+    about = "Co-simulation of flexible fibres in fluids"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Run a scene (the built-in example when CONFIG is omitted).
+    Run {
+        /// Scene file (TOML).
+        config: Option<PathBuf>,
+        /// Override a key by its dotted path, e.g. --set fibre.0.beads=12 (repeatable).
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+        /// Output directory for run.mcap and summary.json.
+        #[arg(long, default_value = "runs/latest")]
+        out: PathBuf,
+        /// Link all components into this process instead of running them as processes.
+        #[arg(long)]
+        in_process: bool,
+        /// No progress bar and no start-up lines.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Check a scene, print its effects, schedule and time-step limits; run nothing.
+    Check {
+        config: Option<PathBuf>,
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+    },
+    /// Print each component's model description.
+    Describe {
+        /// Ask the components linked into this process rather than as processes.
+        #[arg(long)]
+        in_process: bool,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Run a study: a scene over lists of parameter values, error against wall time.
+    Study {
+        /// Study file (TOML).
+        study: PathBuf,
+        /// Output directory (default: the one the study file names).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let _ = ctrlc::set_handler(runner::request_stop);
+    match execute(cli.command) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(msg) => {
+            eprintln!("error: {msg}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn execute(cmd: Cmd) -> Result<(), String> {
+    match cmd {
+        Cmd::Run {
+            config,
+            set,
+            out,
+            in_process,
+            quiet,
+        } => {
+            let scene = scene::load(config.as_deref(), &set).map_err(|e| e.to_string())?;
+            let opts = runner::RunOptions {
+                out: out.clone(),
+                in_process,
+                progress: !quiet,
+                verbose: !quiet,
+            };
+            let result = runner::run(&scene, &opts)
+                .map_err(|e| format!("{e}\n(the log written so far is in {})", out.display()))?;
+            print_result(&result.summary, &out);
+            Ok(())
+        }
+        Cmd::Check { config, set } => {
+            let scene = scene::load(config.as_deref(), &set).map_err(|e| e.to_string())?;
+            let (plan, configured, description) =
+                runner::check(&scene).map_err(|e| e.to_string())?;
+            println!("scene:    {}", scene.name());
+            let effects: Vec<String> = plan
+                .requested
+                .iter()
+                .chain(configured.effects.iter())
+                .cloned()
+                .collect();
+            println!("effects:  {}", effects.join(", "));
+            let phases: Vec<&str> = plan.schedule.iter().map(|p| p.name()).collect();
+            println!("schedule: {}", phases.join(" -> "));
+            println!("nodes:    {} {}", description.name, description.version);
+            println!("beads:    {:?}", configured.beads_per_fibre);
+            println!(
+                "steps:    {} x dt {}",
+                scene.scene.time.steps, scene.scene.time.dt
+            );
+            for (name, limit) in &configured.time_step_limits {
+                println!("limit:    {name}: dt <= {limit:.6e}");
+            }
+            for (name, v) in &configured.derived {
+                println!("derived:  {name} = {v:.6e}");
+            }
+            println!("ok: the scene is valid; nothing was run");
+            Ok(())
+        }
+        Cmd::Describe { in_process, json } => {
+            let all = runner::describe_all(in_process).map_err(|e| e.to_string())?;
+            for d in all {
+                if json {
+                    println!(
+                        "{}",
+                        serde_json::to_string_pretty(&d).map_err(|e| e.to_string())?
+                    );
+                } else {
+                    print!("{}", d.render());
+                }
+            }
+            Ok(())
+        }
+        Cmd::Study { study, out } => {
+            let report = study::run_file(&study, out.as_deref()).map_err(|e| e.to_string())?;
+            println!("{report}");
+            Ok(())
+        }
+    }
+}
+
+fn print_result(summary: &serde_json::Value, out: &std::path::Path) {
+    println!(
+        "{}: {} steps in {:.2} s ({})",
+        summary["status"].as_str().unwrap_or("?"),
+        summary["steps"],
+        summary["wall_seconds"].as_f64().unwrap_or(0.0),
+        summary["process_layout"].as_str().unwrap_or("")
+    );
+    if let Some(m) = summary["metrics"].as_object() {
+        for (name, v) in m {
+            match (v["reference"].as_f64(), v["relative_error"].as_f64()) {
+                (Some(r), Some(e)) => println!(
+                    "  {name} = {:.6} (reference {r:.6}, relative error {:.2} %)",
+                    v["value"].as_f64().unwrap_or(f64::NAN),
+                    100.0 * e
+                ),
+                _ => println!("  {name} = {}", v["value"]),
+            }
+        }
+    }
+    println!(
+        "wrote {}/run.mcap and {}/summary.json",
+        out.display(),
+        out.display()
+    );
+}

@@ -1,1 +1,89 @@
-fn main() {}
+//! The fibre node as its own process: serves the `cosim` interface over iceoryx2.
+//!
+//! Usage: `fibre-node serve --prefix PREFIX --name NAME` (started by the coordinator), or
+//! `fibre-node describe` to print the model description as JSON.
+//!
+//! Testing hook: with `FIBRECOSIM_FAULT=exit-at-step:N` in the environment the node writes a
+//! line to stderr and exits with status 3 when asked to run a phase of step N, so that the
+//! coordinator's handling of a dying node can be tested.
+use cosim::{
+    Component, ComponentError, Configured, Exchange, ModelDescription, Phase, PhaseReport,
+};
+use fibre_node::FibreComponent;
+use std::process::ExitCode;
+
+struct FaultAt {
+    inner: FibreComponent,
+    step: Option<u64>,
+}
+
+impl Component for FaultAt {
+    fn describe(&self) -> ModelDescription {
+        self.inner.describe()
+    }
+    fn configure(
+        &mut self,
+        scene: &str,
+        ex: &mut dyn Exchange,
+    ) -> Result<Configured, ComponentError> {
+        self.inner.configure(scene, ex)
+    }
+    fn run_phase(
+        &mut self,
+        step: u64,
+        phase: Phase,
+        ex: &mut dyn Exchange,
+    ) -> Result<PhaseReport, ComponentError> {
+        if self.step == Some(step) {
+            eprintln!("fibre-node: injected fault at step {step}, phase {phase}");
+            std::process::exit(3);
+        }
+        self.inner.run_phase(step, phase, ex)
+    }
+    fn save_state(&self) -> Result<Vec<u8>, ComponentError> {
+        self.inner.save_state()
+    }
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), ComponentError> {
+        self.inner.restore_state(state)
+    }
+}
+
+fn usage() -> ExitCode {
+    eprintln!("usage: fibre-node serve --prefix PREFIX --name NAME | fibre-node describe");
+    ExitCode::from(2)
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match args.first().map(String::as_str) {
+        Some("describe") => {
+            let d = FibreComponent::new().describe();
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&d).expect("description serialises")
+            );
+            ExitCode::SUCCESS
+        }
+        Some("serve") => {
+            let value = |flag: &str| args.windows(2).find(|w| w[0] == flag).map(|w| w[1].clone());
+            let (Some(prefix), Some(name)) = (value("--prefix"), value("--name")) else {
+                return usage();
+            };
+            let step = std::env::var("FIBRECOSIM_FAULT")
+                .ok()
+                .and_then(|f| f.strip_prefix("exit-at-step:").and_then(|n| n.parse().ok()));
+            let mut component = FaultAt {
+                inner: FibreComponent::new(),
+                step,
+            };
+            match cosim::ipc::serve(&mut component, &prefix, &name) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("fibre-node: {e}");
+                    ExitCode::from(1)
+                }
+            }
+        }
+        _ => usage(),
+    }
+}

@@ -1,0 +1,234 @@
+//! The run log: one MCAP file per run, JSON messages with JSON-schema schemas so that
+//! Foxglove opens it directly (`foxglove.SceneUpdate` for the beads, plain JSON for plots).
+//!
+//! Channels: `/scene` (scene text, effects, schedule; once), `/fibre/bead_states` (every
+//! exchanged bead state at the output interval, full precision), `/fibre/scene`
+//! (`foxglove.SceneUpdate`: spheres and a line per fibre), `/diagnostics` (energies, speeds),
+//! `/timings` (wall seconds per phase so far; the only channel that is not deterministic).
+//! Log time is simulation time (scene units) times 1e9. The writer closes a chunk at every
+//! output so that the file stays readable up to the last output if the run is cut short.
+use cosim::BeadState;
+use mcap::records::{MessageHeader, Metadata};
+use serde_json::json;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::Path;
+
+pub struct RunLog {
+    writer: mcap::Writer<BufWriter<File>>,
+    scene: u16,
+    states: u16,
+    foxglove: u16,
+    diagnostics: u16,
+    timings: u16,
+    sequence: u32,
+}
+
+const OBJECT_SCHEMA: &str = r#"{"type":"object"}"#;
+
+const SCENE_UPDATE_SCHEMA: &str = r#"{"title":"foxglove.SceneUpdate","type":"object","properties":{"deletions":{"type":"array"},"entities":{"type":"array","items":{"type":"object","properties":{"timestamp":{"type":"object"},"frame_id":{"type":"string"},"id":{"type":"string"},"lifetime":{"type":"object"},"frame_locked":{"type":"boolean"},"metadata":{"type":"array"},"arrows":{"type":"array"},"cubes":{"type":"array"},"spheres":{"type":"array"},"cylinders":{"type":"array"},"lines":{"type":"array"},"triangles":{"type":"array"},"texts":{"type":"array"},"models":{"type":"array"}}}}}}"#;
+
+fn mcap_err(e: mcap::McapError) -> String {
+    format!("MCAP log: {e}")
+}
+
+impl RunLog {
+    pub fn create(path: &Path) -> Result<Self, String> {
+        let file =
+            File::create(path).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
+        let mut writer = mcap::WriteOptions::new()
+            .profile("")
+            .library(concat!(
+                "fibre-cosim coordinator ",
+                env!("CARGO_PKG_VERSION")
+            ))
+            .create(BufWriter::new(file))
+            .map_err(mcap_err)?;
+        let mut channel = |topic: &str, schema: &str, data: &str| -> Result<u16, String> {
+            let sid = writer
+                .add_schema(schema, "jsonschema", data.as_bytes())
+                .map_err(mcap_err)?;
+            writer
+                .add_channel(sid, topic, "json", &BTreeMap::new())
+                .map_err(mcap_err)
+        };
+        let scene = channel("/scene", "fibrecosim.Scene", OBJECT_SCHEMA)?;
+        let states = channel("/fibre/bead_states", "fibrecosim.BeadStates", OBJECT_SCHEMA)?;
+        let foxglove = channel("/fibre/scene", "foxglove.SceneUpdate", SCENE_UPDATE_SCHEMA)?;
+        let diagnostics = channel("/diagnostics", "fibrecosim.Diagnostics", OBJECT_SCHEMA)?;
+        let timings = channel("/timings", "fibrecosim.Timings", OBJECT_SCHEMA)?;
+        Ok(Self {
+            writer,
+            scene,
+            states,
+            foxglove,
+            diagnostics,
+            timings,
+            sequence: 0,
+        })
+    }
+
+    fn write(&mut self, channel: u16, time: f64, value: &serde_json::Value) -> Result<(), String> {
+        self.sequence += 1;
+        let t = (time.max(0.0) * 1e9).round() as u64;
+        let header = MessageHeader {
+            channel_id: channel,
+            sequence: self.sequence,
+            log_time: t,
+            publish_time: t,
+        };
+        let data = serde_json::to_vec(value).map_err(|e| e.to_string())?;
+        self.writer
+            .write_to_known_channel(&header, &data)
+            .map_err(mcap_err)
+    }
+
+    pub fn scene(
+        &mut self,
+        toml: &str,
+        effects: &[String],
+        schedule: &[String],
+    ) -> Result<(), String> {
+        let v = json!({ "toml": toml, "effects": effects, "schedule": schedule });
+        self.write(self.scene, 0.0, &v)?;
+        let mut meta = BTreeMap::new();
+        meta.insert("toml".to_string(), toml.to_string());
+        meta.insert("effects".to_string(), effects.join(","));
+        self.writer
+            .write_metadata(&Metadata {
+                name: "scene".into(),
+                metadata: meta,
+            })
+            .map_err(mcap_err)
+    }
+
+    /// Bead states (full precision) and the matching Foxglove scene update.
+    pub fn bead_states(
+        &mut self,
+        step: u64,
+        time: f64,
+        beads_per_fibre: &[usize],
+        radii: &[f64],
+        states: &[BeadState],
+    ) -> Result<(), String> {
+        let rows: Vec<Vec<f64>> = states
+            .iter()
+            .map(|s| {
+                let mut r = Vec::with_capacity(13);
+                r.extend_from_slice(&s.position);
+                r.extend_from_slice(&s.orientation);
+                r.extend_from_slice(&s.velocity);
+                r.extend_from_slice(&s.angular_velocity);
+                r
+            })
+            .collect();
+        let v = json!({
+            "step": step, "time": time, "beads_per_fibre": beads_per_fibre,
+            "columns": ["x","y","z","qs","qx","qy","qz","vx","vy","vz","wx","wy","wz"],
+            "states": rows,
+        });
+        self.write(self.states, time, &v)?;
+        let stamp =
+            json!({ "sec": time.floor() as i64, "nsec": ((time - time.floor()) * 1e9) as i64 });
+        let mut entities = Vec::new();
+        let mut start = 0;
+        for (f, &n) in beads_per_fibre.iter().enumerate() {
+            let beads = &states[start..start + n];
+            start += n;
+            let d = 2.0 * radii.get(f).copied().unwrap_or(1.0);
+            let spheres: Vec<_> = beads
+                .iter()
+                .map(|b| {
+                    let q = b.orientation;
+                    json!({
+                        "pose": { "position": {"x": b.position[0], "y": b.position[1], "z": b.position[2]},
+                                  "orientation": {"x": q[1], "y": q[2], "z": q[3], "w": q[0]} },
+                        "size": {"x": d, "y": d, "z": d},
+                        "color": {"r": 0.85, "g": 0.45, "b": 0.1, "a": 1.0}
+                    })
+                })
+                .collect();
+            let points: Vec<_> = beads
+                .iter()
+                .map(|b| json!({"x": b.position[0], "y": b.position[1], "z": b.position[2]}))
+                .collect();
+            entities.push(json!({
+                "timestamp": stamp, "frame_id": "world", "id": format!("fibre-{f}"),
+                "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [],
+                "arrows": [], "cubes": [], "spheres": spheres, "cylinders": [],
+                "lines": [{
+                    "type": 0,
+                    "pose": {"position": {"x": 0, "y": 0, "z": 0}, "orientation": {"x": 0, "y": 0, "z": 0, "w": 1}},
+                    "thickness": 0.2, "scale_invariant": false, "points": points,
+                    "color": {"r": 0.1, "g": 0.1, "b": 0.1, "a": 1.0}, "colors": [], "indices": []
+                }],
+                "triangles": [], "texts": [], "models": []
+            }));
+        }
+        self.write(
+            self.foxglove,
+            time,
+            &json!({ "deletions": [], "entities": entities }),
+        )
+    }
+
+    pub fn diagnostics(
+        &mut self,
+        step: u64,
+        time: f64,
+        values: &[(String, f64)],
+    ) -> Result<(), String> {
+        let mut m = serde_json::Map::new();
+        m.insert("step".into(), json!(step));
+        m.insert("time".into(), json!(time));
+        for (k, v) in values {
+            m.insert(k.clone(), json!(v));
+        }
+        self.write(self.diagnostics, time, &serde_json::Value::Object(m))
+    }
+
+    pub fn timings(
+        &mut self,
+        step: u64,
+        time: f64,
+        seconds: &BTreeMap<String, f64>,
+    ) -> Result<(), String> {
+        self.write(
+            self.timings,
+            time,
+            &json!({ "step": step, "seconds_per_phase": seconds }),
+        )
+    }
+
+    /// Close the current chunk so everything so far is readable even if the run dies.
+    pub fn flush(&mut self) -> Result<(), String> {
+        self.writer.flush().map_err(mcap_err)
+    }
+
+    pub fn finish(mut self, summary: &serde_json::Value) -> Result<(), String> {
+        let mut meta = BTreeMap::new();
+        meta.insert("summary".to_string(), summary.to_string());
+        self.writer
+            .write_metadata(&Metadata {
+                name: "summary".into(),
+                metadata: meta,
+            })
+            .map_err(mcap_err)?;
+        self.writer.finish().map_err(mcap_err)?;
+        Ok(())
+    }
+}
+
+/// Read back the messages of one topic as JSON values (used by tests and studies).
+pub fn read_topic(path: &Path, topic: &str) -> Result<Vec<serde_json::Value>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let mut out = Vec::new();
+    for m in mcap::MessageStream::new(&bytes).map_err(mcap_err)? {
+        let m = m.map_err(mcap_err)?;
+        if m.channel.topic == topic {
+            out.push(serde_json::from_slice(&m.data).map_err(|e| e.to_string())?);
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,2 @@
+//! Analytic and published references the metrics are compared with.
+pub mod elastica;

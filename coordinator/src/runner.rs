@@ -1,0 +1,489 @@
+//! One run: launch the nodes, check they fit the scene, drive the fractional step, log
+//! everything, and write the summary — also when a node fails or the user presses Ctrl-C.
+use crate::links::{self, LinkFailure, NodeLink};
+use crate::mcap_log::RunLog;
+use crate::scene::LoadedScene;
+use crate::schedule::{self, Plan};
+use cosim::{BeadState, Command, Configured, InProcessExchange, ModelDescription, Port, Reply};
+use serde_json::json;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Ask the run in progress to stop cleanly at the end of the current step (Ctrl-C).
+pub fn request_stop() {
+    INTERRUPTED.store(true, Ordering::SeqCst);
+}
+
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    pub out: PathBuf,
+    pub in_process: bool,
+    /// Show a progress bar on a terminal.
+    pub progress: bool,
+    /// Print the effects, schedule and result lines.
+    pub verbose: bool,
+}
+
+/// The outcome of a completed (or cleanly ended) run.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    pub summary: serde_json::Value,
+    pub mcap: PathBuf,
+}
+
+/// A run that failed; the MCAP log and summary written so far are still in `out`.
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct RunError {
+    pub message: String,
+}
+
+fn fail(message: impl Into<String>) -> RunError {
+    RunError {
+        message: message.into(),
+    }
+}
+
+/// Describe every component this build has (optionally as separate processes).
+pub fn describe_all(in_process: bool) -> Result<Vec<ModelDescription>, RunError> {
+    let ex = InProcessExchange::new();
+    let prefix = cosim::ipc::new_run_prefix();
+    let mut out = Vec::new();
+    for info in [links::fibre_component()] {
+        let mut link = links::start(&info, in_process.then_some(&ex), &prefix)
+            .map_err(|e| fail(e.to_string()))?;
+        let reply = link
+            .call(&Command::Describe)
+            .map_err(|e| fail(e.to_string()))?;
+        let _ = link.shutdown();
+        match reply {
+            Reply::Description(d) => out.push(d),
+            other => {
+                return Err(fail(format!(
+                    "{}: unexpected reply to describe: {other:?}",
+                    info.name
+                )))
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Check a scene fits the components: models, coupling scheme, phases, and each node's own
+/// reading of its tables and time-step limits. Runs nothing.
+pub fn check(scene: &LoadedScene) -> Result<(Plan, Configured, ModelDescription), RunError> {
+    let plan = schedule::plan(scene).map_err(fail)?;
+    let ex = InProcessExchange::new();
+    let info = links::fibre_component();
+    let mut link = links::start(&info, Some(&ex), "check").map_err(|e| fail(e.to_string()))?;
+    let description = describe(link.as_mut())?;
+    check_fit(scene, &plan, &description)?;
+    let configured = configure(link.as_mut(), scene)?;
+    Ok((plan, configured, description))
+}
+
+fn describe(link: &mut dyn NodeLink) -> Result<ModelDescription, RunError> {
+    match link
+        .call(&Command::Describe)
+        .map_err(|e| fail(e.to_string()))?
+    {
+        Reply::Description(d) => Ok(d),
+        other => Err(fail(format!(
+            "{}: unexpected reply to describe: {other:?}",
+            link.name()
+        ))),
+    }
+}
+
+fn configure(link: &mut dyn NodeLink, scene: &LoadedScene) -> Result<Configured, RunError> {
+    match link
+        .call(&Command::Configure {
+            scene_toml: scene.toml.clone(),
+        })
+        .map_err(|e| fail(format!("the scene was refused: {e}")))?
+    {
+        Reply::Configured(c) => Ok(c),
+        other => Err(fail(format!(
+            "{}: unexpected reply to configure: {other:?}",
+            link.name()
+        ))),
+    }
+}
+
+/// The model-description check done before step 0 (the FMI-style compatibility check).
+pub fn check_fit(scene: &LoadedScene, plan: &Plan, d: &ModelDescription) -> Result<(), RunError> {
+    for (i, f) in scene.scene.fibre.iter().enumerate() {
+        let model = f.get("model").and_then(|m| m.as_str()).unwrap_or("");
+        if !model.is_empty() && !d.models.iter().any(|m| m == model) {
+            return Err(fail(format!(
+                "key `fibre.{i}.model`: `{model}` is not a model of {} (it has: {})",
+                d.name,
+                d.models.join(", ")
+            )));
+        }
+    }
+    if !d.coupling_schemes.contains(&plan.coupling) {
+        return Err(fail(format!(
+            "{} does not support the coupling scheme `{}` (it supports: {})",
+            d.name,
+            plan.coupling,
+            d.coupling_schemes.join(", ")
+        )));
+    }
+    for p in plan.schedule.iter().filter(|p| p.node() == d.kind) {
+        if !d.phases.contains(p) {
+            return Err(fail(format!(
+                "{} does not serve the phase `{p}` the schedule needs",
+                d.name
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn writable_dir(out: &Path) -> Result<(), RunError> {
+    std::fs::create_dir_all(out).map_err(|e| {
+        fail(format!(
+            "--out {}: cannot create the output directory: {e}",
+            out.display()
+        ))
+    })?;
+    let probe = out.join(".write-test");
+    std::fs::write(&probe, b"").map_err(|e| {
+        fail(format!(
+            "--out {}: the output directory is not writable: {e}",
+            out.display()
+        ))
+    })?;
+    let _ = std::fs::remove_file(probe);
+    Ok(())
+}
+
+fn radii(scene: &LoadedScene) -> Vec<f64> {
+    scene
+        .scene
+        .fibre
+        .iter()
+        .map(|f| match f.get("bead_radius") {
+            Some(toml::Value::Float(r)) => *r,
+            Some(toml::Value::Integer(r)) => *r as f64,
+            _ => 1.0,
+        })
+        .collect()
+}
+
+/// Largest applied load magnitude over all fibres (scale for the rest criterion).
+fn largest_load(scene: &LoadedScene) -> f64 {
+    let mut m: f64 = 0.0;
+    for f in &scene.scene.fibre {
+        if let Some(toml::Value::Array(loads)) = f.get("loads") {
+            for l in loads.iter().filter_map(|l| l.as_table()) {
+                if let Some(toml::Value::Array(v)) = l.get("force") {
+                    let s: f64 = v
+                        .iter()
+                        .filter_map(|x| x.as_float().or(x.as_integer().map(|i| i as f64)))
+                        .map(|x| x * x)
+                        .sum();
+                    m = m.max(s.sqrt());
+                }
+            }
+        }
+    }
+    m
+}
+
+fn diag(report: &[(String, f64)], name: &str) -> Option<f64> {
+    report.iter().find(|(k, _)| k == name).map(|(_, v)| *v)
+}
+
+/// Run a scene to the end, writing `out/run.mcap` and `out/summary.json`.
+pub fn run(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError> {
+    INTERRUPTED.store(false, Ordering::SeqCst);
+    writable_dir(&opts.out)?;
+    let plan = schedule::plan(scene).map_err(fail)?;
+    let mcap_path = opts.out.join("run.mcap");
+    let mut log = RunLog::create(&mcap_path).map_err(fail)?;
+    let started = Instant::now();
+
+    let ex = InProcessExchange::new();
+    let in_process = opts.in_process.then_some(&ex);
+    if !opts.in_process {
+        cosim::ipc::cleanup_stale_resources();
+    }
+    let prefix = cosim::ipc::new_run_prefix();
+    let info = links::fibre_component();
+    let mut fibre = links::start(&info, in_process, &prefix).map_err(|e| fail(e.to_string()))?;
+
+    let mut state = RunState::default();
+    let outcome = drive(
+        scene,
+        opts,
+        &plan,
+        fibre.as_mut(),
+        in_process,
+        &prefix,
+        &mut log,
+        &mut state,
+    );
+    let shutdown = fibre.shutdown();
+
+    let wall = started.elapsed().as_secs_f64();
+    let (status, error) = match (&outcome, &shutdown) {
+        (Err(e), _) => ("failed", Some(e.message.clone())),
+        (Ok(s), Err(e)) => (*s, Some(format!("shutting down the nodes: {e}"))),
+        (Ok(s), Ok(())) => (*s, None),
+    };
+    let summary = state.summary(scene, &plan, opts, status, error.as_deref(), wall);
+    let write_summary = std::fs::write(
+        opts.out.join("summary.json"),
+        serde_json::to_string_pretty(&summary).unwrap(),
+    );
+    log.finish(&summary).map_err(fail)?;
+    write_summary.map_err(|e| {
+        fail(format!(
+            "cannot write {}: {e}",
+            opts.out.join("summary.json").display()
+        ))
+    })?;
+    if let Some(e) = error {
+        return Err(fail(e));
+    }
+    Ok(RunResult {
+        summary,
+        mcap: mcap_path,
+    })
+}
+
+/// What the run has learned so far; enough to write a summary at any point.
+#[derive(Default)]
+struct RunState {
+    configured: Configured,
+    effects: Vec<String>,
+    steps_done: u64,
+    time: f64,
+    seconds_per_phase: BTreeMap<String, f64>,
+    last_diagnostics: Vec<(String, f64)>,
+    metrics: BTreeMap<String, crate::metrics::Metric>,
+    dimensionless: BTreeMap<String, f64>,
+}
+
+impl RunState {
+    fn summary(
+        &self,
+        scene: &LoadedScene,
+        plan: &Plan,
+        opts: &RunOptions,
+        status: &str,
+        error: Option<&str>,
+        wall: f64,
+    ) -> serde_json::Value {
+        let diagnostics: serde_json::Map<String, serde_json::Value> = self
+            .last_diagnostics
+            .iter()
+            .map(|(k, v)| (k.clone(), json!(v)))
+            .collect();
+        let limits: serde_json::Map<String, serde_json::Value> = self
+            .configured
+            .time_step_limits
+            .iter()
+            .map(|(k, v)| (k.clone(), json!(v)))
+            .collect();
+        let derived: serde_json::Map<String, serde_json::Value> = self
+            .configured
+            .derived
+            .iter()
+            .map(|(k, v)| (k.clone(), json!(v)))
+            .collect();
+        json!({
+            "scene": scene.name(),
+            "scene_file": scene.path.as_ref().map(|p| p.display().to_string()),
+            "status": status,
+            "error": error,
+            "effects": self.effects,
+            "schedule": plan.schedule.iter().map(|p| p.name()).collect::<Vec<_>>(),
+            "process_layout": if opts.in_process { "in-process" } else { "processes" },
+            "steps": self.steps_done,
+            "steps_requested": scene.scene.time.steps,
+            "dt": scene.scene.time.dt,
+            "time": self.time,
+            "wall_seconds": wall,
+            "seconds_per_phase": self.seconds_per_phase,
+            "beads_per_fibre": self.configured.beads_per_fibre,
+            "time_step_limits": limits,
+            "derived": derived,
+            "dimensionless": self.dimensionless,
+            "final_diagnostics": diagnostics,
+            "metrics": self.metrics,
+        })
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn drive(
+    scene: &LoadedScene,
+    opts: &RunOptions,
+    plan: &Plan,
+    fibre: &mut dyn NodeLink,
+    in_process: Option<&InProcessExchange>,
+    prefix: &str,
+    log: &mut RunLog,
+    st: &mut RunState,
+) -> Result<&'static str, RunError> {
+    let description = describe(fibre)?;
+    check_fit(scene, plan, &description)?;
+    st.configured = configure(fibre, scene)?;
+    st.effects = plan
+        .requested
+        .iter()
+        .cloned()
+        .chain(st.configured.effects.iter().cloned())
+        .collect();
+    let schedule_names: Vec<String> = plan.schedule.iter().map(|p| p.name().to_string()).collect();
+    if opts.verbose {
+        eprintln!("scene:    {}", scene.name());
+        eprintln!("effects:  {}", st.effects.join(", "));
+        eprintln!("schedule: {}", schedule_names.join(" -> "));
+        eprintln!(
+            "layout:   {}",
+            if opts.in_process {
+                "in-process".to_string()
+            } else {
+                format!("processes (run prefix {prefix})")
+            }
+        );
+    }
+    log.scene(&scene.toml, &st.effects, &schedule_names)
+        .map_err(fail)?;
+
+    let mut exchange =
+        links::coordinator_exchange(in_process, prefix).map_err(|e| fail(e.to_string()))?;
+    let radii = radii(scene);
+    let beads = st.configured.beads_per_fibre.clone();
+    let mut states: Vec<BeadState> = Vec::new();
+    exchange
+        .read_states(Port::BeadStates, &mut states)
+        .map_err(|e| fail(format!("reading the initial bead states: {e}")))?;
+    let initial = states.clone();
+    log.bead_states(0, 0.0, &beads, &radii, &states)
+        .map_err(fail)?;
+
+    let dt = scene.scene.time.dt;
+    let steps = scene.scene.time.steps;
+    let interval = scene.output_interval();
+    let load_scale = largest_load(scene);
+    let bar = progress_bar(opts.progress, steps);
+    let mut status = "completed";
+    for step in 0..steps {
+        let mut report = Vec::new();
+        for &phase in &plan.schedule {
+            let t0 = Instant::now();
+            let reply = fibre
+                .call(&Command::RunPhase { step, phase })
+                .map_err(|e| {
+                    let detail = match &e {
+                        LinkFailure::Refused { message, .. } => message.clone(),
+                        other => other.to_string(),
+                    };
+                    fail(format!(
+                        "node `{}` failed at step {step}, phase {phase}: {detail}",
+                        fibre.name()
+                    ))
+                })?;
+            *st.seconds_per_phase
+                .entry(phase.name().to_string())
+                .or_default() += t0.elapsed().as_secs_f64();
+            if let Reply::PhaseDone(r) = reply {
+                report = r.diagnostics;
+            }
+        }
+        st.steps_done = step + 1;
+        st.time = (step + 1) as f64 * dt;
+        if let Some((k, v)) = report.iter().find(|(_, v)| !v.is_finite()) {
+            log.diagnostics(step + 1, st.time, &report).map_err(fail)?;
+            return Err(fail(format!(
+                "the run became unstable at step {}: {k} = {v}; lower time.dt (limits: {:?})",
+                step + 1,
+                st.configured.time_step_limits
+            )));
+        }
+        st.last_diagnostics = report;
+        let at_rest = scene
+            .scene
+            .time
+            .rest_tolerance
+            .is_some_and(|tol| is_at_rest(&st.last_diagnostics, tol, load_scale));
+        let stop = INTERRUPTED.load(Ordering::SeqCst);
+        if (step + 1) % interval == 0 || step + 1 == steps || at_rest || stop {
+            exchange
+                .read_states(Port::BeadStates, &mut states)
+                .map_err(|e| fail(format!("reading bead states at step {}: {e}", step + 1)))?;
+            log.bead_states(step + 1, st.time, &beads, &radii, &states)
+                .map_err(fail)?;
+            log.diagnostics(step + 1, st.time, &st.last_diagnostics)
+                .map_err(fail)?;
+            log.timings(step + 1, st.time, &st.seconds_per_phase)
+                .map_err(fail)?;
+            log.flush().map_err(fail)?;
+        }
+        bar.inc(1);
+        if stop {
+            status = "interrupted";
+            break;
+        }
+        if at_rest {
+            status = "at-rest";
+            break;
+        }
+    }
+    bar.finish_and_clear();
+    exchange
+        .read_states(Port::BeadStates, &mut states)
+        .map_err(|e| fail(format!("reading the final bead states: {e}")))?;
+    st.metrics = crate::metrics::compute(
+        &scene.scene.analysis.metrics,
+        &scene.scene,
+        &beads,
+        &initial,
+        &states,
+        &mut st.dimensionless,
+    )
+    .map_err(fail)?;
+    Ok(status)
+}
+
+/// At rest: the largest net force on a free bead is below `tol` times the largest load, and
+/// the kinetic energy is below `tol^2` times the elastic energy (both dimensionless, so that
+/// neither a turning point nor a pass through equilibrium is mistaken for rest).
+fn is_at_rest(report: &[(String, f64)], tol: f64, load_scale: f64) -> bool {
+    let (Some(force), Some(kinetic), Some(elastic)) = (
+        diag(report, "max_net_force"),
+        diag(report, "kinetic_energy"),
+        diag(report, "elastic_energy"),
+    ) else {
+        return false;
+    };
+    let force_ok = if load_scale > 0.0 {
+        force <= tol * load_scale
+    } else {
+        true
+    };
+    force_ok && kinetic <= tol * tol * elastic.max(f64::MIN_POSITIVE)
+}
+
+fn progress_bar(show: bool, steps: u64) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(steps);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:40}] {pos}/{len} steps, eta {eta}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}

@@ -1,0 +1,352 @@
+//! Scene files: TOML read with `--set` overrides applied first, then checked key by key.
+//!
+//! The coordinator owns the top-level keys (`time`, `output`, `analysis`, ...). Each node
+//! owns its own tables (`[[fibre]]` for the fibre node, `[fluid]` and `[walls]` for the fluid
+//! node) and refuses what it does not know when it is configured, so that a new model adds
+//! keys without the coordinator or the other node changing.
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// The scene the coordinator runs when no file is given: a 2D cantilever under a tip load
+/// large enough to bend it well past small-deflection theory (alpha = 2).
+pub const BUILT_IN_EXAMPLE: &str = include_str!("../../configs/cantilever.toml");
+
+/// A user-facing error: one sentence that names the key or path and what was expected.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct SceneError(pub String);
+
+fn err(msg: impl Into<String>) -> SceneError {
+    SceneError(msg.into())
+}
+
+/// Keys the coordinator reads. Unknown keys are refused.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Short name of the scene, used in logs and the summary.
+    #[serde(default)]
+    pub title: Option<String>,
+    /// Free text describing the scene and its reference.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// 2 (motion in the x-y plane, no twist) or 3.
+    #[serde(default = "default_dimensions")]
+    pub dimensions: u8,
+    pub time: TimeConfig,
+    /// Fibres; read and checked by the fibre node.
+    #[serde(default)]
+    pub fibre: Vec<toml::Table>,
+    /// The fluid; read and checked by the fluid node. Absent: no fluid, no fluid process.
+    #[serde(default)]
+    pub fluid: Option<toml::Table>,
+    /// Moving walls; read by the fluid node. Absent: periodic.
+    #[serde(default)]
+    pub walls: Option<toml::Table>,
+    #[serde(default)]
+    pub output: OutputConfig,
+    #[serde(default)]
+    pub analysis: AnalysisConfig,
+}
+
+fn default_dimensions() -> u8 {
+    3
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeConfig {
+    /// Time step, in the scene's time unit. Must be positive and below every node's limit.
+    pub dt: f64,
+    /// Number of steps to run (upper bound when `rest_tolerance` is set).
+    pub steps: u64,
+    /// Stop early once the fibres are at rest: the largest bead speed times dt, and the
+    /// largest net force on a free bead relative to the largest applied load, both below
+    /// this value. Absent: run all steps.
+    #[serde(default)]
+    pub rest_tolerance: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct OutputConfig {
+    /// Steps between logged bead states and diagnostics (default: steps / 200, at least 1).
+    #[serde(default)]
+    pub interval: Option<u64>,
+}
+
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct AnalysisConfig {
+    /// Observables to compute at the end of the run, by name (see `coordinator::metrics`).
+    #[serde(default)]
+    pub metrics: Vec<String>,
+}
+
+/// A scene after overrides and checks, with the text the nodes receive.
+#[derive(Debug, Clone)]
+pub struct LoadedScene {
+    pub scene: Scene,
+    /// The scene as TOML text after `--set` overrides: what every node is configured with.
+    pub toml: String,
+    /// Where it came from (`None` for the built-in example).
+    pub path: Option<PathBuf>,
+}
+
+impl LoadedScene {
+    pub fn name(&self) -> String {
+        if let Some(t) = &self.scene.title {
+            return t.clone();
+        }
+        match &self.path {
+            Some(p) => p
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            None => "built-in example".into(),
+        }
+    }
+
+    /// Steps between outputs.
+    pub fn output_interval(&self) -> u64 {
+        self.scene
+            .output
+            .interval
+            .unwrap_or((self.scene.time.steps / 200).max(1))
+            .max(1)
+    }
+}
+
+/// Read a scene file (or the built-in example when `path` is `None`) and apply overrides.
+pub fn load(path: Option<&Path>, overrides: &[String]) -> Result<LoadedScene, SceneError> {
+    let text = match path {
+        Some(p) => std::fs::read_to_string(p)
+            .map_err(|e| err(format!("cannot read scene file {}: {e}", p.display())))?,
+        None => BUILT_IN_EXAMPLE.to_string(),
+    };
+    let origin = path.map_or("the built-in example".to_string(), |p| {
+        p.display().to_string()
+    });
+    from_text(&text, &origin, overrides).map(|(scene, toml)| LoadedScene {
+        scene,
+        toml,
+        path: path.map(Path::to_path_buf),
+    })
+}
+
+/// Parse TOML text, apply `--set PATH=VALUE` overrides, check the coordinator's keys.
+pub fn from_text(
+    text: &str,
+    origin: &str,
+    overrides: &[String],
+) -> Result<(Scene, String), SceneError> {
+    let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+        err(format!(
+            "{origin} is not valid TOML: {}",
+            e.to_string().trim()
+        ))
+    })?;
+    let mut value = toml::Value::Table(table);
+    for o in overrides {
+        apply_override(&mut value, o)?;
+    }
+    let toml_text =
+        toml::to_string(&value).map_err(|e| err(format!("cannot re-serialise the scene: {e}")))?;
+    let scene = parse_checked(value, origin)?;
+    Ok((scene, toml_text))
+}
+
+fn parse_checked(value: toml::Value, origin: &str) -> Result<Scene, SceneError> {
+    let scene: Scene = serde_path_to_error::deserialize(value).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner().to_string();
+        let inner = inner.trim();
+        if path == "." || path.is_empty() {
+            err(format!("{origin}: {inner}"))
+        } else {
+            err(format!("{origin}: key `{path}`: {inner}"))
+        }
+    })?;
+    check_ranges(&scene)?;
+    Ok(scene)
+}
+
+fn check_ranges(s: &Scene) -> Result<(), SceneError> {
+    if s.dimensions != 2 && s.dimensions != 3 {
+        return Err(err(format!(
+            "key `dimensions`: expected 2 or 3, got {}",
+            s.dimensions
+        )));
+    }
+    if !(s.time.dt.is_finite() && s.time.dt > 0.0) {
+        return Err(err(format!(
+            "key `time.dt`: expected a positive number, got {}",
+            s.time.dt
+        )));
+    }
+    if s.time.steps == 0 {
+        return Err(err("key `time.steps`: expected at least 1 step, got 0"));
+    }
+    if let Some(tol) = s.time.rest_tolerance {
+        if !(tol.is_finite() && tol > 0.0) {
+            return Err(err(format!(
+                "key `time.rest_tolerance`: expected a positive number, got {tol}"
+            )));
+        }
+    }
+    if s.output.interval == Some(0) {
+        return Err(err("key `output.interval`: expected at least 1, got 0"));
+    }
+    for m in &s.analysis.metrics {
+        if !crate::metrics::KNOWN.contains(&m.as_str()) {
+            return Err(err(format!(
+                "key `analysis.metrics`: unknown metric `{m}` (known: {})",
+                crate::metrics::KNOWN.join(", ")
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Apply one `PATH=VALUE` override. PATH is dotted, array indices are numbers
+/// (`fibre.0.beads`); VALUE is a TOML value (`12`, `1e-3`, `[-0.01, 0.01]`, `"bead-spring"`),
+/// or a bare word taken as a string. Every component of PATH but the last must exist.
+pub fn apply_override(root: &mut toml::Value, spec: &str) -> Result<(), SceneError> {
+    let (path, raw) = spec.split_once('=').ok_or_else(|| {
+        err(format!(
+            "--set {spec}: expected PATH=VALUE, e.g. fibre.0.beads=12"
+        ))
+    })?;
+    let path = path.trim();
+    let value = parse_value(raw.trim());
+    let parts: Vec<&str> = path.split('.').collect();
+    if parts.iter().any(|p| p.is_empty()) {
+        return Err(err(format!("--set {spec}: `{path}` is not a dotted path")));
+    }
+    let mut cur: &mut toml::Value = root;
+    for (i, part) in parts.iter().enumerate() {
+        let last = i + 1 == parts.len();
+        let so_far = parts[..=i].join(".");
+        cur = match cur {
+            toml::Value::Table(t) => {
+                if last {
+                    t.insert((*part).to_string(), value);
+                    return Ok(());
+                }
+                if !t.contains_key(*part) {
+                    return Err(err(format!(
+                        "--set {spec}: the scene has no `{so_far}` (it has: {})",
+                        keys(t)
+                    )));
+                }
+                t.get_mut(*part).expect("checked above")
+            }
+            toml::Value::Array(a) => {
+                let n = a.len();
+                let idx: usize = part.parse().map_err(|_| {
+                    err(format!(
+                        "--set {spec}: `{so_far}`: expected an array index 0..{n}, got `{part}`"
+                    ))
+                })?;
+                if idx >= n {
+                    return Err(err(format!(
+                        "--set {spec}: `{so_far}` does not exist (the array has {n} element{})",
+                        if n == 1 { "" } else { "s" }
+                    )));
+                }
+                if last {
+                    a[idx] = value;
+                    return Ok(());
+                }
+                &mut a[idx]
+            }
+            _ => {
+                return Err(err(format!(
+                    "--set {spec}: `{}` is a value, not a table or array",
+                    parts[..i].join(".")
+                )))
+            }
+        };
+    }
+    Ok(())
+}
+
+fn keys(t: &toml::Table) -> String {
+    let v: Vec<&str> = t.keys().map(String::as_str).collect();
+    if v.is_empty() {
+        "nothing".into()
+    } else {
+        v.join(", ")
+    }
+}
+
+fn parse_value(raw: &str) -> toml::Value {
+    let doc = format!("v = {raw}");
+    match doc.parse::<toml::Table>() {
+        Ok(mut t) => t
+            .remove("v")
+            .unwrap_or(toml::Value::String(raw.to_string())),
+        Err(_) => toml::Value::String(raw.to_string()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table(text: &str) -> toml::Value {
+        toml::Value::Table(text.parse().unwrap())
+    }
+
+    #[test]
+    fn overrides_reach_nested_arrays_and_tables() {
+        let mut v = table("[time]\ndt = 1.0\n[[fibre]]\nbeads = 3\nloads = [{ bead = -1, force = [0.0, 1.0, 0.0] }]\n");
+        apply_override(&mut v, "fibre.0.beads=12").unwrap();
+        apply_override(&mut v, "time.dt=1e-3").unwrap();
+        apply_override(&mut v, "fibre.0.loads.0.force=[0.0,-2.5,0.0]").unwrap();
+        apply_override(&mut v, "fibre.0.model=bead-spring").unwrap();
+        assert_eq!(v["fibre"][0]["beads"].as_integer(), Some(12));
+        assert_eq!(v["time"]["dt"].as_float(), Some(1e-3));
+        assert_eq!(v["fibre"][0]["loads"][0]["force"][1].as_float(), Some(-2.5));
+        assert_eq!(v["fibre"][0]["model"].as_str(), Some("bead-spring"));
+    }
+
+    #[test]
+    fn overrides_of_missing_paths_name_them() {
+        let mut v = table("[time]\ndt = 1.0\n[[fibre]]\nbeads = 3\n");
+        let e = apply_override(&mut v, "fibre.1.beads=4").unwrap_err().0;
+        assert!(e.contains("fibre.1") && e.contains("1 element"), "{e}");
+        let e = apply_override(&mut v, "walls.velocity=[0.1]")
+            .unwrap_err()
+            .0;
+        assert!(e.contains("`walls`"), "{e}");
+        let e = apply_override(&mut v, "time.dt.x=2").unwrap_err().0;
+        assert!(e.contains("time.dt"), "{e}");
+        let e = apply_override(&mut v, "time.dt").unwrap_err().0;
+        assert!(e.contains("PATH=VALUE"), "{e}");
+    }
+
+    #[test]
+    fn the_built_in_example_is_valid() {
+        let s = load(None, &[]).unwrap();
+        assert_eq!(s.scene.dimensions, 2);
+        assert!(!s.scene.fibre.is_empty());
+    }
+
+    #[test]
+    fn unknown_and_out_of_range_keys_are_refused() {
+        let base = "[time]\ndt = 0.1\nsteps = 3\n";
+        let e = from_text(&format!("{base}speed = 2\n"), "s", &[])
+            .unwrap_err()
+            .0;
+        assert!(e.contains("time") && e.contains("speed"), "{e}");
+        let e = from_text(&base.replace("0.1", "-0.1"), "s", &[])
+            .unwrap_err()
+            .0;
+        assert!(e.contains("time.dt") && e.contains("-0.1"), "{e}");
+        let e = from_text(&format!("dimensions = 4\n{base}"), "s", &[])
+            .unwrap_err()
+            .0;
+        assert!(e.contains("dimensions"), "{e}");
+    }
+}

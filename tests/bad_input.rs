@@ -1,0 +1,176 @@
+//! Bad input ends with one clear message naming the key or path, a non-zero exit code and
+//! no panic trace.
+mod common;
+use common::*;
+
+fn write_scene(name: &str, text: &str) -> std::path::PathBuf {
+    let dir = out_dir(&format!("bad-{name}"));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const GOOD: &str = r#"
+dimensions = 2
+[time]
+dt = 0.005
+steps = 10
+[[fibre]]
+model = "cohesive-beam"
+beads = 5
+bead_radius = 1.0
+youngs_modulus = 1.0e4
+clamp = [0]
+"#;
+
+fn expect_error(args: &[&str], needles: &[&str]) {
+    let o = coordinator(args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success(),
+        "expected failure for {args:?}, got success"
+    );
+    assert!(!err.contains("panicked"), "panic for {args:?}: {err}");
+    assert!(
+        err.starts_with("error: "),
+        "no clear error for {args:?}: {err}"
+    );
+    for n in needles {
+        assert!(err.contains(n), "message for {args:?} lacks `{n}`: {err}");
+    }
+}
+
+fn check(name: &str, text: &str, needles: &[&str]) {
+    let p = write_scene(name, text);
+    expect_error(&["check", p.to_str().unwrap()], needles);
+}
+
+#[test]
+fn the_good_scene_passes() {
+    let p = write_scene("good", GOOD);
+    let o = coordinator(&["check", p.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn unknown_top_level_key() {
+    check("unknown-top", &format!("colour = 3\n{GOOD}"), &["colour"]);
+}
+
+#[test]
+fn unknown_fibre_key() {
+    check(
+        "unknown-fibre",
+        &GOOD.replace("clamp = [0]", "clamp = [0]\nstiffnes = 3"),
+        &["fibre.0", "stiffnes"],
+    );
+}
+
+#[test]
+fn wrong_type() {
+    check(
+        "wrong-type",
+        &GOOD.replace("beads = 5", "beads = \"five\""),
+        &["fibre.0.beads"],
+    );
+    check(
+        "wrong-type-time",
+        &GOOD.replace("steps = 10", "steps = 1.5"),
+        &["time.steps"],
+    );
+}
+
+#[test]
+fn negative_radius() {
+    check(
+        "negative-radius",
+        &GOOD.replace("bead_radius = 1.0", "bead_radius = -1.0"),
+        &["fibre.0.bead_radius", "-1"],
+    );
+}
+
+#[test]
+fn zero_beads() {
+    check(
+        "zero-beads",
+        &GOOD.replace("beads = 5", "beads = 0"),
+        &["fibre.0.beads"],
+    );
+}
+
+#[test]
+fn clamp_out_of_range() {
+    check(
+        "clamp-range",
+        &GOOD.replace("clamp = [0]", "clamp = [7]"),
+        &["fibre.0.clamp", "7"],
+    );
+}
+
+#[test]
+fn time_step_above_the_stability_limit() {
+    check(
+        "unstable-dt",
+        &GOOD.replace("dt = 0.005", "dt = 0.5"),
+        &["time.dt", "stiffness"],
+    );
+}
+
+#[test]
+fn set_path_that_does_not_exist() {
+    let p = write_scene("set-path", GOOD);
+    expect_error(
+        &["check", p.to_str().unwrap(), "--set", "fibre.3.beads=4"],
+        &["fibre.3"],
+    );
+    expect_error(
+        &["check", p.to_str().unwrap(), "--set", "nothing.here=4"],
+        &["nothing"],
+    );
+    expect_error(
+        &["check", p.to_str().unwrap(), "--set", "fibre.0.beads"],
+        &["PATH=VALUE"],
+    );
+}
+
+#[test]
+fn unreadable_file() {
+    expect_error(
+        &["check", "/nonexistent/scene.toml"],
+        &["/nonexistent/scene.toml"],
+    );
+}
+
+#[test]
+fn not_toml() {
+    check("not-toml", "this is [ not toml", &["TOML"]);
+}
+
+#[test]
+fn unwritable_out() {
+    let p = write_scene("unwritable", GOOD);
+    let blocker = p.parent().unwrap().join("a-file");
+    std::fs::write(&blocker, b"x").unwrap();
+    let out = blocker.join("sub");
+    expect_error(
+        &[
+            "run",
+            p.to_str().unwrap(),
+            "--in-process",
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &["--out"],
+    );
+}
+
+#[test]
+fn a_fluid_scene_is_refused_with_the_missing_effect() {
+    check(
+        "fluid",
+        &format!("{GOOD}\n[fluid]\nmethod = \"spm\"\n"),
+        &["hydrodynamics"],
+    );
+}

@@ -1,0 +1,83 @@
+//! Shared helpers for the workspace-level tests.
+#![allow(dead_code)]
+use coordinator::runner::{self, RunOptions};
+use coordinator::scene;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+pub fn config(name: &str) -> PathBuf {
+    root().join("configs").join(name)
+}
+
+/// A fresh output directory for one test.
+pub fn out_dir(test: &str) -> PathBuf {
+    let d = root()
+        .join("target")
+        .join("test-runs")
+        .join(format!("{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// Run a scene in-process through the coordinator library; returns summary.json.
+pub fn run_in_process(cfg: &Path, overrides: &[String], test: &str) -> serde_json::Value {
+    let scene = scene::load(Some(cfg), overrides).unwrap_or_else(|e| panic!("{e}"));
+    let opts = RunOptions {
+        out: out_dir(test),
+        in_process: true,
+        progress: false,
+        verbose: false,
+    };
+    runner::run(&scene, &opts)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .summary
+}
+
+pub fn metric(summary: &serde_json::Value, name: &str) -> (f64, f64) {
+    let m = &summary["metrics"][name];
+    (
+        m["value"].as_f64().expect("metric value"),
+        m["reference"].as_f64().expect("metric reference"),
+    )
+}
+
+/// Directory of the release binaries, built once per test process (cargo's freshness check
+/// makes this cheap when they are up to date).
+pub fn bin_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let status = Command::new(cargo)
+            .args([
+                "build",
+                "--release",
+                "--bins",
+                "-p",
+                "fibre-node",
+                "-p",
+                "coordinator",
+            ])
+            .current_dir(root())
+            .status()
+            .expect("run cargo build");
+        assert!(status.success(), "building the node binaries failed");
+        let target = std::env::var_os("CARGO_TARGET_DIR")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| root().join("target"));
+        target.join("release")
+    })
+}
+
+/// Run the coordinator executable with arguments.
+pub fn coordinator(args: &[&str]) -> Output {
+    Command::new(bin_dir().join("coordinator"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("start coordinator")
+}
