@@ -91,6 +91,13 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             let result = runner::run(&scene, &opts)
                 .map_err(|e| format!("{e}\n(the log written so far is in {})", out.display()))?;
             print_result(&result.summary, &out);
+            if result.summary["status"] == "interrupted" {
+                return Err(format!(
+                    "interrupted at step {} (Ctrl-C); the log and summary so far are in {}",
+                    result.summary["steps"],
+                    out.display()
+                ));
+            }
             Ok(())
         }
         Cmd::Check { config, set } => {

@@ -44,7 +44,7 @@ pub fn error_against_time(
         y0 = y0.min(p.error.max(floor));
         y1 = y1.max(p.error.max(floor));
     }
-    let (x0, x1) = (x0 / 2.0, x1 * 2.0);
+    let (x0, x1) = (x0 / 1.5, x1 * 4.0);
     let (y0, y1) = (y0 / 3.0, y1 * 3.0);
     let e = |e: DrawingAreaErrorKind<_>| format!("plotting {}: {e:?}", path.display());
     let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
@@ -58,6 +58,8 @@ pub fn error_against_time(
         .map_err(e)?;
     chart
         .configure_mesh()
+        .x_labels(6)
+        .y_labels(8)
         .x_desc("wall time (s)")
         .y_desc(y_label)
         .label_style(("sans-serif", 15))

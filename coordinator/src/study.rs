@@ -154,9 +154,10 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path) -> Result<String, Strin
                 .iter()
                 .map(|(k, v)| format!("{k}={}", toml_inline(v))),
         );
+        // Label a variant by the first key of each [[vary]] entry; the others follow it.
         let label = assignment
             .iter()
-            .filter(|(_, v)| !matches!(v, toml::Value::Array(_)))
+            .filter(|(k, _)| study.vary.iter().any(|v| v.key.as_ref() == Some(k) || v.keys.first() == Some(k)))
             .map(|(k, v)| format!("{}={}", k.rsplit('.').next().unwrap_or(k), toml_inline(v)))
             .collect::<Vec<_>>()
             .join(" ");
