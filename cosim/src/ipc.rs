@@ -12,11 +12,12 @@
 //!   `[Record]` slices with an [`crate::ExchangeHeader`] user header (see [`IpcExchange`]).
 //!
 //! # Waiting
-//! Whoever waits (the node for a request, the coordinator for a reply) first polls for about
-//! [`SPIN`] (a phase of the other side is often that short), then blocks on its iceoryx2
-//! event listener in slices of at most [`BLOCK_SLICE`]. Events are latched, so a notification
-//! sent while the waiter was still polling wakes it at once; a spurious wake-up costs one poll.
-//! Between slices the waiter checks that its peer is still there. Nothing busy-loops unbounded.
+//! Whoever waits (the node for a request, the coordinator for a reply) first polls shared
+//! memory for about [`SPIN`] (a phase of the other side is often that short; see [`Poller`]),
+//! then blocks on its iceoryx2 event listener in slices of at most [`BLOCK_SLICE`]. Events are
+//! latched, so a notification sent while the waiter was still polling wakes it at once; a
+//! spurious wake-up costs one poll. Between slices the waiter checks that its peer is still
+//! there. Nothing busy-loops unbounded.
 //!
 //! # Dead peers
 //! - The coordinator side ([`NodeClient`]) owns the node's process: between waits it calls
@@ -50,8 +51,60 @@ use std::time::Duration;
 
 /// How long a waiter polls before it blocks on its event listener.
 pub const SPIN: Duration = Duration::from_micros(50);
+/// The first part of [`SPIN`], polled without yielding the CPU.
+pub const SPIN_BUSY: Duration = Duration::from_micros(50);
+/// The poll after a wait that had to block (see [`Poller`]).
+pub const SPIN_AFTER_BLOCK: Duration = Duration::from_micros(200);
 /// The longest a waiter blocks before it checks on its peer again.
 pub const BLOCK_SLICE: Duration = Duration::from_millis(50);
+
+/// Spin-then-poll state of one waiter (the node waiting for requests, the coordinator for
+/// replies).
+///
+/// Polls for [`SPIN`]: busily for the first [`SPIN_BUSY`], then yielding the CPU between
+/// polls so that a peer the scheduler put on this core can run. After a wait that had to
+/// block, the next poll lasts [`SPIN_AFTER_BLOCK`]: the peer blocked too and answers only
+/// after its own wake-up, and a short window would keep both sides blocking forever.
+#[derive(Debug, Clone)]
+pub struct Poller {
+    window: Duration,
+}
+
+impl Default for Poller {
+    fn default() -> Self {
+        Self { window: SPIN }
+    }
+}
+
+impl Poller {
+    /// Poll until `poll` yields something or the window has passed (then `Ok(None)`: block).
+    pub fn poll<T, E>(
+        &mut self,
+        mut poll: impl FnMut() -> Result<Option<T>, E>,
+    ) -> Result<Option<T>, E> {
+        let start = std::time::Instant::now();
+        loop {
+            if let Some(x) = poll()? {
+                self.window = SPIN;
+                return Ok(Some(x));
+            }
+            let elapsed = start.elapsed();
+            if elapsed >= self.window {
+                return Ok(None);
+            }
+            if elapsed < SPIN_BUSY {
+                std::hint::spin_loop();
+            } else {
+                std::thread::yield_now();
+            }
+        }
+    }
+
+    /// The wait after the last [`Poller::poll`] had to block.
+    pub fn blocked(&mut self) {
+        self.window = SPIN_AFTER_BLOCK;
+    }
+}
 
 /// An error of the node side of the transport.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

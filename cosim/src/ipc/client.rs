@@ -1,5 +1,5 @@
 //! The coordinator side: start a node, send it commands, notice when it dies.
-use super::{control_service, create_node, event_service, IpcError, Names, BLOCK_SLICE, SPIN};
+use super::{control_service, create_node, event_service, IpcError, Names, BLOCK_SLICE};
 use crate::{Command, Reply};
 use iceoryx2::node::Node;
 use iceoryx2::port::client::Client;
@@ -60,6 +60,7 @@ fn tail_text(tail: &str) -> String {
 pub struct NodeClient {
     name: String,
     timeout: Duration,
+    poller: super::Poller,
     process: Option<Process>,
     pid: u32,
     client: Client<Svc, [u8], (), [u8], ()>,
@@ -126,6 +127,7 @@ impl NodeClient {
         Ok(Self {
             name: node_name.to_string(),
             timeout: DEFAULT_TIMEOUT,
+            poller: super::Poller::default(),
             process: None,
             pid: 0,
             client: control
@@ -196,15 +198,11 @@ impl NodeClient {
 
         let start = Instant::now();
         let reply = |bytes: &[u8]| Reply::from_bytes(bytes).map_err(&lost);
-        loop {
-            if let Some(r) = pending.receive().map_err(|e| lost(format!("{e:?}")))? {
-                return reply(r.payload());
-            }
-            if start.elapsed() >= SPIN {
-                break;
-            }
-            std::hint::spin_loop();
+        let receive = || pending.receive().map_err(|e| lost(format!("{e:?}")));
+        if let Some(r) = self.poller.poll(receive)? {
+            return reply(r.payload());
         }
+        self.poller.blocked();
         loop {
             let left = self.timeout.saturating_sub(start.elapsed());
             if left.is_zero() {
@@ -287,10 +285,16 @@ impl NodeClient {
 impl Drop for NodeClient {
     fn drop(&mut self) {
         if let Some(p) = self.process.as_mut() {
-            if let Ok(None) = p.child.try_wait() {
-                let _ = p.child.kill();
-                let _ = p.child.wait();
-                // A killed node cannot release its shared memory; do it for it.
+            let clean_exit = match p.child.try_wait() {
+                Ok(Some(status)) => status.success(),
+                _ => {
+                    let _ = p.child.kill();
+                    let _ = p.child.wait();
+                    false
+                }
+            };
+            if !clean_exit {
+                // A killed or crashed node could not release its shared memory.
                 super::cleanup_stale_resources();
             }
         }

@@ -123,6 +123,19 @@ impl IpcExchange {
             .try_for_each(|p| self.subscribe(p.port, &p.record))
     }
 
+    /// Whether a publication this participant has not read yet waits on `port` (for any
+    /// record type it reads there). Cheap (no system call): poll it before blocking.
+    pub fn has_unread(&self, port: Port) -> bool {
+        fn pending<T: Record>(lane: &Option<Lane<T>>) -> bool {
+            let subscriber = lane.as_ref().and_then(|l| l.subscriber.as_ref());
+            subscriber.is_some_and(|s| s.has_samples().unwrap_or(false))
+        }
+        let i = port as usize;
+        pending(&self.lanes.states[i])
+            || pending(&self.lanes.impulses[i])
+            || pending(&self.lanes.forces[i])
+    }
+
     /// Hand the latest publication of each of this participant's ports to readers that
     /// subscribed since its last publication.
     pub fn update_connections(&self) {

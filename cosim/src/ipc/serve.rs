@@ -1,5 +1,5 @@
 //! The node side: answer the coordinator's commands until `Shutdown`.
-use super::{control_service, event_service, IpcError, IpcExchange, Names, BLOCK_SLICE, SPIN};
+use super::{control_service, event_service, IpcError, IpcExchange, Names, BLOCK_SLICE};
 use crate::{Command, Component, Reply};
 use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::node::NodeState;
@@ -7,7 +7,6 @@ use iceoryx2::port::listener::Listener;
 use iceoryx2::port::server::Server;
 use iceoryx2::prelude::{AllocationStrategy, CallbackProgression, PortFactory};
 use iceoryx2::service::ipc;
-use std::time::Instant;
 
 type Svc = ipc::Service;
 type Control = super::Control<Svc>;
@@ -43,50 +42,63 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
         .create()
         .map_err(IpcError::iox("create the control server"))?;
     let mut watch = Watch::new(node_name);
+    let mut poller = super::Poller::default();
 
     loop {
-        let request = next_request(&server, &listener, &control, &exchange, &mut watch)?;
+        let request = next_request(
+            &server,
+            &listener,
+            &control,
+            &exchange,
+            &mut watch,
+            &mut poller,
+        )?;
         watch.seen_client = true;
         let (reply, done) = match Command::from_bytes(request.payload()) {
             Ok(command) => crate::dispatch(component, &mut exchange, command),
             Err(message) => (Reply::Error(message), false),
         };
         let bytes = reply.to_bytes();
-        request
+        let sent = request
             .loan_slice_uninit(bytes.len())
-            .map_err(IpcError::iox("loan memory for a reply"))?
-            .write_from_slice(&bytes)
-            .send()
-            .map_err(IpcError::iox("send a reply"))?;
+            .map_err(IpcError::iox("loan memory for a reply"))
+            .and_then(|r| {
+                r.write_from_slice(&bytes)
+                    .send()
+                    .map_err(IpcError::iox("send a reply"))
+            });
         drop(request);
-        replied
-            .notify()
-            .map_err(IpcError::iox("notify the coordinator"))?;
+        let sent = sent.and_then(|()| {
+            replied
+                .notify()
+                .map(drop)
+                .map_err(IpcError::iox("notify the coordinator"))
+        });
+        if let Err(e) = sent {
+            // Most likely the coordinator went away meanwhile; say so if it did.
+            watch.check(&control)?;
+            return Err(e);
+        }
         if done {
             return Ok(());
         }
     }
 }
 
-/// Poll for [`SPIN`], then block on the wake event in slices, checking on the coordinator.
+/// Poll briefly, then block on the wake event in slices, checking on the coordinator.
 fn next_request(
     server: &Server<Svc, [u8], (), [u8], ()>,
     listener: &Listener<Svc>,
     control: &Control,
     exchange: &IpcExchange,
     watch: &mut Watch,
+    poller: &mut super::Poller,
 ) -> Result<Request, IpcError> {
     let receive = || server.receive().map_err(IpcError::iox("receive a request"));
-    let spin_end = Instant::now() + SPIN;
-    loop {
-        if let Some(r) = receive()? {
-            return Ok(r);
-        }
-        if Instant::now() >= spin_end {
-            break;
-        }
-        std::hint::spin_loop();
+    if let Some(r) = poller.poll(receive)? {
+        return Ok(r);
     }
+    poller.blocked();
     loop {
         let woken = listener
             .timed_wait(|_| {}, BLOCK_SLICE)
