@@ -30,9 +30,12 @@
 //!
 //! # Stale resources
 //! A normal drop releases everything: the last owner of a service removes it from `/dev/shm`
-//! and `/tmp/iceoryx2`. A killed process leaves its resources behind;
-//! [`cleanup_stale_resources`] (called at coordinator start, and after a node had to be killed)
-//! removes those of every dead iceoryx2 node.
+//! and `/tmp/iceoryx2` (only iceoryx2's machine-wide `iox2_*_node.*.global_mgmt` segment and
+//! the empty `nodes`/`services` directories stay, by iceoryx2's design). A killed process
+//! leaves its resources behind: [`cleanup_stale_resources`] (call it at coordinator start;
+//! [`NodeClient`] calls it after a node crashed or had to be killed) removes those of every
+//! dead iceoryx2 node; iceoryx2 also does so whenever one of our nodes is created or dropped.
+//! [`resources_of_run`] lists what of a run is still there.
 mod client;
 mod exchange;
 mod serve;
@@ -52,7 +55,7 @@ use std::time::Duration;
 /// How long a waiter polls before it blocks on its event listener.
 pub const SPIN: Duration = Duration::from_micros(50);
 /// The first part of [`SPIN`], polled without yielding the CPU.
-pub const SPIN_BUSY: Duration = Duration::from_micros(50);
+pub const SPIN_BUSY: Duration = Duration::from_micros(20);
 /// The poll after a wait that had to block (see [`Poller`]).
 pub const SPIN_AFTER_BLOCK: Duration = Duration::from_micros(200);
 /// The longest a waiter blocks before it checks on its peer again.
