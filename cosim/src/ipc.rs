@@ -61,7 +61,7 @@ pub const SPIN_AFTER_BLOCK: Duration = Duration::from_micros(200);
 /// The longest a waiter blocks before it checks on its peer again.
 pub const BLOCK_SLICE: Duration = Duration::from_millis(50);
 
-/// Spin-then-poll state of one waiter (the node waiting for requests, the coordinator for
+/// Poll-then-block state of one waiter (the node waiting for requests, the coordinator for
 /// replies).
 ///
 /// Polls for [`SPIN`]: busily for the first [`SPIN_BUSY`], then yielding the CPU between

@@ -522,6 +522,12 @@ fn exchange_without_serving_publisher() {
     );
     assert_eq!(out, many);
 
+    // A participant reads its own publications too.
+    assert_eq!(
+        a.read_states(Port::BeadStates, &mut out).unwrap().sequence,
+        2
+    );
+
     // Ports and record types are separate services.
     assert!(late
         .read_impulses(Port::BeadStates, &mut Vec::new())

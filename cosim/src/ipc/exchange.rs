@@ -77,6 +77,8 @@ impl Record for BeadForce {
 pub struct IpcExchange {
     lanes: Lanes,
     prefix: String,
+    /// `{prefix}/node/`: the iceoryx2 node names of serving participants start so.
+    node_prefix: String,
     participant: String,
     node: Node<Svc>,
 }
@@ -88,6 +90,7 @@ impl IpcExchange {
         Ok(Self {
             lanes: Lanes::default(),
             prefix: prefix.to_string(),
+            node_prefix: format!("{prefix}/node/"),
             participant: participant.to_string(),
             node: create_node(&names.node)?,
         })
@@ -116,10 +119,13 @@ impl IpcExchange {
         }
     }
 
-    /// [`IpcExchange::subscribe`] to each of a model description's inputs.
+    /// [`IpcExchange::subscribe`] to each of a model description's inputs (records of
+    /// another name are left to be subscribed on first read).
     pub fn subscribe_inputs(&mut self, inputs: &[PortDescription]) -> Result<(), ExchangeError> {
+        let known = [BeadState::NAME, BeadImpulse::NAME, BeadForce::NAME];
         inputs
             .iter()
+            .filter(|p| known.contains(&p.record.as_str()))
             .try_for_each(|p| self.subscribe(p.port, &p.record))
     }
 
@@ -234,24 +240,32 @@ impl IpcExchange {
         port: Port,
         out: &mut Vec<T>,
     ) -> Result<ExchangeHeader, ExchangeError> {
-        let own = *self.node.id();
-        let node_prefix = format!("{}/node/", self.prefix);
         self.subscriber::<T>(port)?;
         // Re-borrow: `subscriber` ended its borrow of self; split fields now.
         let lane = T::lanes(&mut self.lanes)[port as usize]
             .as_mut()
             .expect("subscribed");
         lane.drain(port)?;
-        if lane.latest.is_none() && lane.service.dynamic_config().number_of_publishers() > 0 {
-            if wake_publishers(&self.node, &lane.service, own, &node_prefix) == 0 {
-                return Err(ExchangeError::Transport {
-                    port: port.name(),
-                    message: "its publisher does not serve, so its latest publication cannot \
-                              reach this new reader (subscribe before it publishes)"
-                        .into(),
-                });
+        if lane.latest.is_none() {
+            // A new reader: the history reaches it when a publisher updates its connections.
+            if let Some(own) = &lane.publisher {
+                let _ = own.update_connections();
+                lane.drain(port)?;
             }
-            lane.wait_for_history(port)?;
+            let others = lane.service.dynamic_config().number_of_publishers()
+                - usize::from(lane.publisher.is_some());
+            if lane.latest.is_none() && others > 0 {
+                let own = *self.node.id();
+                if wake_publishers(&self.node, &lane.service, own, &self.node_prefix) == 0 {
+                    return Err(ExchangeError::Transport {
+                        port: port.name(),
+                        message: "its publisher does not serve, so its latest publication \
+                                  cannot reach this new reader (subscribe before it publishes)"
+                            .into(),
+                    });
+                }
+                lane.wait_for_history(port)?;
+            }
         }
         let sample = lane
             .latest
