@@ -654,3 +654,10 @@ fn run_prefixes_are_unique_and_usable() {
     // Nothing of this test run is dead, so at most others' leftovers are cleaned.
     let _ = ipc::cleanup_stale_resources();
 }
+
+#[test]
+fn node_client_can_move_between_threads() {
+    fn send<T: Send>() {}
+    send::<NodeClient>();
+    send::<LinkError>();
+}
