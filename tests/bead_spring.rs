@@ -18,7 +18,11 @@ fn bead_spring_cantilever_matches_euler_bernoulli_with_k_b_equal_e_i_over_l0() {
         format!("fibre.0.beads={beads}"),
         format!("fibre.0.loads.0.force=[0.0,{},0.0]", -force),
     ];
-    let s = run_in_process(&config("cantilever.toml"), &overrides, "bead-spring-cantilever");
+    let s = run_in_process(
+        &config("cantilever.toml"),
+        &overrides,
+        "bead-spring-cantilever",
+    );
     assert_eq!(s["status"], "at-rest", "{s}");
     let (over_l, _) = metric(&s, "tip_deflection_over_length");
     let l0 = 2.0;
@@ -27,9 +31,22 @@ fn bead_spring_cantilever_matches_euler_bernoulli_with_k_b_equal_e_i_over_l0() {
     let l_eff = l0 * (beads as f64 - 1.5);
     let theory = force * l_eff.powi(3) / (3.0 * ei);
     let err = (deflection / theory - 1.0).abs();
-    println!("bead-spring: delta = {deflection:.6}, P L^3 / (3 E I) = {theory:.6}, error {:.3} %", 100.0 * err);
-    assert!(err < 0.05, "bead-spring cantilever off Euler-Bernoulli by {:.2} %", 100.0 * err);
+    println!(
+        "bead-spring: delta = {deflection:.6}, P L^3 / (3 E I) = {theory:.6}, error {:.3} %",
+        100.0 * err
+    );
+    assert!(
+        err < 0.05,
+        "bead-spring cantilever off Euler-Bernoulli by {:.2} %",
+        100.0 * err
+    );
     // The bending stiffness the node derived is the mapping stated above.
-    let k_b = s["derived"]["fibre.0.bending_stiffness"].as_f64().expect("k_b reported");
-    assert!((k_b - ei / l0).abs() < 1e-9 * k_b, "k_b = {k_b}, E I / l0 = {}", ei / l0);
+    let k_b = s["derived"]["fibre.0.bending_stiffness"]
+        .as_f64()
+        .expect("k_b reported");
+    assert!(
+        (k_b - ei / l0).abs() < 1e-9 * k_b,
+        "k_b = {k_b}, E I / l0 = {}",
+        ei / l0
+    );
 }

@@ -10,19 +10,41 @@ fn sigint_ends_the_run_cleanly() {
     let out = out_dir("interrupt");
     let cfg = config("cantilever.toml");
     let mut child = std::process::Command::new(bin_dir().join("coordinator"))
-        .args(["run", cfg.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()])
-        .args(["--set", "time.steps=100000000", "--set", "output.interval=1000", "--set", "time.rest_tolerance=1e-300"])
+        .args([
+            "run",
+            cfg.to_str().unwrap(),
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .args([
+            "--set",
+            "time.steps=100000000",
+            "--set",
+            "output.interval=1000",
+            "--set",
+            "time.rest_tolerance=1e-300",
+        ])
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
     // Wait until the run is under way (first outputs logged), then interrupt it.
     let t0 = Instant::now();
-    while !out.join("run.mcap").exists() || std::fs::metadata(out.join("run.mcap")).unwrap().len() < 20_000 {
-        assert!(t0.elapsed() < Duration::from_secs(60), "the run did not start");
+    while !out.join("run.mcap").exists()
+        || std::fs::metadata(out.join("run.mcap")).unwrap().len() < 20_000
+    {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "the run did not start"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
     let pid = child.id().to_string();
-    assert!(std::process::Command::new("kill").args(["-INT", &pid]).status().unwrap().success());
+    assert!(std::process::Command::new("kill")
+        .args(["-INT", &pid])
+        .status()
+        .unwrap()
+        .success());
     let o = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
@@ -32,5 +54,9 @@ fn sigint_ends_the_run_cleanly() {
     assert_eq!(summary["status"], "interrupted");
     let steps = summary["steps"].as_u64().unwrap();
     let states = read_topic(&out.join("run.mcap"), "/fibre/bead_states").expect("MCAP readable");
-    assert_eq!(states.last().unwrap()["step"].as_u64().unwrap(), steps, "last logged state is the last step");
+    assert_eq!(
+        states.last().unwrap()["step"].as_u64().unwrap(),
+        steps,
+        "last logged state is the last step"
+    );
 }

@@ -157,7 +157,12 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path) -> Result<String, Strin
         // Label a variant by the first key of each [[vary]] entry; the others follow it.
         let label = assignment
             .iter()
-            .filter(|(k, _)| study.vary.iter().any(|v| v.key.as_ref() == Some(k) || v.keys.first() == Some(k)))
+            .filter(|(k, _)| {
+                study
+                    .vary
+                    .iter()
+                    .any(|v| v.key.as_ref() == Some(k) || v.keys.first() == Some(k))
+            })
             .map(|(k, v)| format!("{}={}", k.rsplit('.').next().unwrap_or(k), toml_inline(v)))
             .collect::<Vec<_>>()
             .join(" ");

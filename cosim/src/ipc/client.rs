@@ -3,7 +3,7 @@ use super::{control_service, create_node, event_service, IpcError, Names, BLOCK_
 use crate::{Command, Reply};
 use iceoryx2::node::Node;
 use iceoryx2::port::client::Client;
-use iceoryx2::port::listener::Listener;
+use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::{AllocationStrategy, PortFactory};
 use iceoryx2::service::ipc_threadsafe;
@@ -211,9 +211,12 @@ impl NodeClient {
                     seconds: self.timeout.as_secs_f64(),
                 });
             }
-            self.replies
-                .timed_wait(|_| {}, left.min(BLOCK_SLICE))
-                .map_err(|e| lost(format!("cannot wait for a reply: {e:?}")))?;
+            // A signal (the user's Ctrl-C, handled by the coordinator) interrupts the wait;
+            // that is a spurious wake-up, not a lost link.
+            match self.replies.timed_wait(|_| {}, left.min(BLOCK_SLICE)) {
+                Ok(_) | Err(ListenerWaitError::InterruptSignal) => {}
+                Err(e) => return Err(lost(format!("cannot wait for a reply: {e:?}"))),
+            }
             if let Some(r) = pending.receive().map_err(|e| lost(format!("{e:?}")))? {
                 return reply(r.payload());
             }

@@ -100,9 +100,11 @@ fn next_request(
     }
     poller.blocked();
     loop {
-        let woken = listener
-            .timed_wait(|_| {}, BLOCK_SLICE)
-            .map_err(IpcError::iox("wait for a request"))?;
+        // A signal interrupting the wait is a spurious wake-up.
+        let woken = match listener.timed_wait(|_| {}, BLOCK_SLICE) {
+            Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => 0,
+            other => other.map_err(IpcError::iox("wait for a request"))?,
+        };
         // A wake-up may be a new reader asking for the latest publication.
         exchange.update_connections();
         if let Some(r) = receive()? {

@@ -10,6 +10,7 @@ use cosim::{
     Component, ComponentError, Configured, Exchange, ModelDescription, Phase, PhaseReport,
 };
 use fibre_node::FibreComponent;
+use std::io::Write;
 use std::process::ExitCode;
 
 struct FaultAt {
@@ -79,7 +80,8 @@ fn main() -> ExitCode {
             match cosim::ipc::serve(&mut component, &prefix, &name) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
-                    eprintln!("fibre-node: {e}");
+                    // The coordinator may be gone and stderr a broken pipe: never panic here.
+                    let _ = writeln!(std::io::stderr(), "fibre-node: {e}");
                     ExitCode::from(1)
                 }
             }
