@@ -41,22 +41,14 @@ impl Metric {
     }
 }
 
-/// What the metrics need to know about fibre 0 of the scene.
+/// What the metrics need to know about fibre 0: its model and tip loads from the scene,
+/// its rigidities as the fibre node derived them (so defaults live in one place).
 struct FibreZero<'a> {
     model: &'a str,
-    radius: f64,
-    youngs: f64,
-    shear: f64,
+    bending_rigidity: f64,
+    torsional_rigidity: Option<f64>,
     tip_force: [f64; 3],
     tip_torque: [f64; 3],
-}
-
-fn num(t: &toml::Table, key: &str) -> Option<f64> {
-    match t.get(key)? {
-        toml::Value::Float(f) => Some(*f),
-        toml::Value::Integer(i) => Some(*i as f64),
-        _ => None,
-    }
 }
 
 fn vec3(v: Option<&toml::Value>) -> [f64; 3] {
@@ -73,13 +65,17 @@ fn vec3(v: Option<&toml::Value>) -> [f64; 3] {
     out
 }
 
-fn fibre_zero<'a>(scene: &'a crate::scene::Scene, beads: usize) -> Result<FibreZero<'a>, String> {
+fn fibre_zero<'a>(
+    scene: &'a crate::scene::Scene,
+    derived: &[(String, f64)],
+    beads: usize,
+) -> Result<FibreZero<'a>, String> {
     let t = scene.fibre.first().ok_or("the scene has no fibre")?;
     let model = t.get("model").and_then(|v| v.as_str()).unwrap_or("");
-    let radius = num(t, "bead_radius").ok_or("fibre.0.bead_radius missing")?;
-    let youngs = num(t, "youngs_modulus").ok_or("fibre.0.youngs_modulus missing")?;
-    // Same default as the fibre node: Poisson ratio 0.3.
-    let shear = num(t, "shear_modulus").unwrap_or(youngs / 2.6);
+    let get = |k: &str| derived.iter().find(|(n, _)| n == k).map(|(_, v)| *v);
+    let bending_rigidity =
+        get("fibre.0.bending_rigidity").ok_or("the fibre node did not report fibre.0.bending_rigidity")?;
+    let torsional_rigidity = get("fibre.0.torsional_rigidity");
     let (mut tip_force, mut tip_torque) = ([0.0; 3], [0.0; 3]);
     if let Some(toml::Value::Array(loads)) = t.get("loads") {
         for l in loads.iter().filter_map(|l| l.as_table()) {
@@ -95,9 +91,8 @@ fn fibre_zero<'a>(scene: &'a crate::scene::Scene, beads: usize) -> Result<FibreZ
     }
     Ok(FibreZero {
         model,
-        radius,
-        youngs,
-        shear,
+        bending_rigidity,
+        torsional_rigidity,
         tip_force,
         tip_torque,
     })
@@ -137,6 +132,7 @@ pub fn compute(
     names: &[String],
     scene: &crate::scene::Scene,
     beads_per_fibre: &[usize],
+    derived: &[(String, f64)],
     initial: &[BeadState],
     last: &[BeadState],
     dimensionless: &mut BTreeMap<String, f64>,
@@ -148,12 +144,11 @@ pub fn compute(
     let n = *beads_per_fibre
         .first()
         .ok_or("metrics need at least one fibre")?;
-    let f = fibre_zero(scene, n)?;
+    let f = fibre_zero(scene, derived, n)?;
     let (x0, xt0) = (initial[0].position, initial[n - 1].position);
     let axis_vec = sub(xt0, x0);
     let length = norm(axis_vec);
     let axis = scale(axis_vec, 1.0 / length);
-    let inertia = std::f64::consts::PI * f.radius.powi(4) / 4.0;
     for name in names {
         let m = match name.as_str() {
             "tip_deflection_over_length" | "tip_rotation" => {
@@ -164,7 +159,7 @@ pub fn compute(
                     ));
                 }
                 let load_dir = scale(f.tip_force, 1.0 / p);
-                let alpha = p * length * length / (f.youngs * inertia);
+                let alpha = p * length * length / f.bending_rigidity;
                 dimensionless.insert("alpha".into(), alpha);
                 let reference = elastica::tip(alpha);
                 if name == "tip_rotation" {
@@ -209,8 +204,8 @@ pub fn compute(
                 }
                 let (w, v) = relative_rotation(initial[n - 1].orientation, last[n - 1].orientation);
                 let value = 2.0 * dot(v, axis).atan2(w);
-                let polar = std::f64::consts::PI * f.radius.powi(4) / 2.0;
-                let reference = torque * length / (f.shear * polar);
+                let gj = f.torsional_rigidity.ok_or("metric `twist_angle` needs a 3D cohesive-beam fibre")?;
+                let reference = torque * length / gj;
                 Metric::with_reference(value, reference, "T L / (G J), J = pi r^4 / 2")
             }
             other => return Err(format!("unknown metric `{other}`")),

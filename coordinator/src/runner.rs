@@ -447,6 +447,7 @@ fn drive(
         &scene.scene.analysis.metrics,
         &scene.scene,
         &beads,
+        &st.configured.derived,
         &initial,
         &states,
         &mut st.dimensionless,
