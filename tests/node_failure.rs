@@ -43,3 +43,42 @@ fn a_dying_fibre_node_is_reported_and_the_log_stays_readable() {
     assert_eq!(summary["status"], "failed");
     assert_eq!(summary["steps"], 25);
 }
+
+#[test]
+fn an_unresponsive_fibre_node_ends_the_run_after_the_timeout() {
+    let out = out_dir("node-hang");
+    let cfg = config("cantilever.toml");
+    let t0 = std::time::Instant::now();
+    let o = std::process::Command::new(bin_dir().join("coordinator"))
+        .args([
+            "run",
+            cfg.to_str().unwrap(),
+            "--quiet",
+            "--node-timeout",
+            "1",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .args(["--set", "time.steps=100"])
+        .env("FIBRECOSIM_FAULT", "hang-at-step:7")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        t0.elapsed() < std::time::Duration::from_secs(30),
+        "took {:?}",
+        t0.elapsed()
+    );
+    for needle in [
+        "fibre-node",
+        "step 7",
+        "fibre-positions",
+        "did not answer within 1",
+    ] {
+        assert!(err.contains(needle), "message lacks `{needle}`: {err}");
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "failed");
+}

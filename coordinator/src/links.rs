@@ -68,14 +68,24 @@ impl NodeLink for InProcessLink {
 pub struct ProcessLink {
     name: String,
     client: cosim::ipc::NodeClient,
+    /// The link broke (the node died or stopped answering): do not ask it to shut down,
+    /// dropping the client kills the process.
+    broken: bool,
 }
 
 impl ProcessLink {
-    pub fn spawn(name: &str, program: &std::path::Path, prefix: &str) -> Result<Self, LinkFailure> {
-        let client = cosim::ipc::NodeClient::spawn(program, &[], prefix, name)?;
+    pub fn spawn(
+        name: &str,
+        program: &std::path::Path,
+        prefix: &str,
+        timeout: std::time::Duration,
+    ) -> Result<Self, LinkFailure> {
+        let mut client = cosim::ipc::NodeClient::spawn(program, &[], prefix, name)?;
+        client.set_timeout(timeout);
         Ok(Self {
             name: name.to_string(),
             client,
+            broken: false,
         })
     }
 }
@@ -85,11 +95,16 @@ impl NodeLink for ProcessLink {
         &self.name
     }
     fn call(&mut self, command: &Command) -> Result<Reply, LinkFailure> {
-        let reply = self.client.call(command)?;
+        let reply = self
+            .client
+            .call(command)
+            .inspect_err(|_| self.broken = true)?;
         refused(&self.name, reply)
     }
     fn shutdown(self: Box<Self>) -> Result<(), LinkFailure> {
-        self.client.shutdown()?;
+        if !self.broken {
+            self.client.shutdown()?;
+        }
         Ok(())
     }
 }
@@ -135,11 +150,15 @@ pub fn executable_path(executable: &str) -> Result<PathBuf, LinkFailure> {
     )))
 }
 
+/// How long the coordinator waits for a node's reply before declaring it unresponsive.
+pub const DEFAULT_NODE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(600);
+
 /// Start one component, in this process or as its own process.
 pub fn start(
     info: &ComponentInfo,
     in_process: Option<&InProcessExchange>,
     prefix: &str,
+    timeout: std::time::Duration,
 ) -> Result<Box<dyn NodeLink>, LinkFailure> {
     match in_process {
         Some(ex) => Ok(Box::new(InProcessLink::new(
@@ -149,7 +168,9 @@ pub fn start(
         ))),
         None => {
             let program = executable_path(info.executable)?;
-            Ok(Box::new(ProcessLink::spawn(info.name, &program, prefix)?))
+            Ok(Box::new(ProcessLink::spawn(
+                info.name, &program, prefix, timeout,
+            )?))
         }
     }
 }

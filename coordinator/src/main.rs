@@ -34,6 +34,9 @@ enum Cmd {
         /// No progress bar and no start-up lines.
         #[arg(long, short)]
         quiet: bool,
+        /// Seconds to wait for one reply of a node before ending the run as unresponsive.
+        #[arg(long, value_name = "SECONDS", default_value_t = 600.0)]
+        node_timeout: f64,
     },
     /// Check a scene, print its effects, schedule and time-step limits; run nothing.
     Check {
@@ -80,13 +83,20 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             out,
             in_process,
             quiet,
+            node_timeout,
         } => {
+            if !(node_timeout.is_finite() && node_timeout > 0.0) {
+                return Err(format!(
+                    "--node-timeout: expected a positive number of seconds, got {node_timeout}"
+                ));
+            }
             let scene = scene::load(config.as_deref(), &set).map_err(|e| e.to_string())?;
             let opts = runner::RunOptions {
                 out: out.clone(),
                 in_process,
                 progress: !quiet,
                 verbose: !quiet,
+                node_timeout: std::time::Duration::from_secs_f64(node_timeout),
             };
             let result = runner::run(&scene, &opts)
                 .map_err(|e| format!("{e}\n(the log written so far is in {})", out.display()))?;

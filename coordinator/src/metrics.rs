@@ -73,8 +73,8 @@ fn fibre_zero<'a>(
     let t = scene.fibre.first().ok_or("the scene has no fibre")?;
     let model = t.get("model").and_then(|v| v.as_str()).unwrap_or("");
     let get = |k: &str| derived.iter().find(|(n, _)| n == k).map(|(_, v)| *v);
-    let bending_rigidity =
-        get("fibre.0.bending_rigidity").ok_or("the fibre node did not report fibre.0.bending_rigidity")?;
+    let bending_rigidity = get("fibre.0.bending_rigidity")
+        .ok_or("the fibre node did not report fibre.0.bending_rigidity")?;
     let torsional_rigidity = get("fibre.0.torsional_rigidity");
     let (mut tip_force, mut tip_torque) = ([0.0; 3], [0.0; 3]);
     if let Some(toml::Value::Array(loads)) = t.get("loads") {
@@ -204,7 +204,9 @@ pub fn compute(
                 }
                 let (w, v) = relative_rotation(initial[n - 1].orientation, last[n - 1].orientation);
                 let value = 2.0 * dot(v, axis).atan2(w);
-                let gj = f.torsional_rigidity.ok_or("metric `twist_angle` needs a 3D cohesive-beam fibre")?;
+                let gj = f
+                    .torsional_rigidity
+                    .ok_or("metric `twist_angle` needs a 3D cohesive-beam fibre")?;
                 let reference = torque * length / gj;
                 Metric::with_reference(value, reference, "T L / (G J), J = pi r^4 / 2")
             }

@@ -26,6 +26,21 @@ pub struct RunOptions {
     pub progress: bool,
     /// Print the effects, schedule and result lines.
     pub verbose: bool,
+    /// How long to wait for one reply of a node before ending the run.
+    pub node_timeout: std::time::Duration,
+}
+
+impl RunOptions {
+    /// Options for a run into `out`, quiet, with the default node timeout.
+    pub fn quiet(out: impl Into<PathBuf>, in_process: bool) -> Self {
+        Self {
+            out: out.into(),
+            in_process,
+            progress: false,
+            verbose: false,
+            node_timeout: links::DEFAULT_NODE_TIMEOUT,
+        }
+    }
 }
 
 /// The outcome of a completed (or cleanly ended) run.
@@ -54,8 +69,13 @@ pub fn describe_all(in_process: bool) -> Result<Vec<ModelDescription>, RunError>
     let prefix = cosim::ipc::new_run_prefix();
     let mut out = Vec::new();
     for info in [links::fibre_component()] {
-        let mut link = links::start(&info, in_process.then_some(&ex), &prefix)
-            .map_err(|e| fail(e.to_string()))?;
+        let mut link = links::start(
+            &info,
+            in_process.then_some(&ex),
+            &prefix,
+            links::DEFAULT_NODE_TIMEOUT,
+        )
+        .map_err(|e| fail(e.to_string()))?;
         let reply = link
             .call(&Command::Describe)
             .map_err(|e| fail(e.to_string()))?;
@@ -79,7 +99,8 @@ pub fn check(scene: &LoadedScene) -> Result<(Plan, Configured, ModelDescription)
     let plan = schedule::plan(scene).map_err(fail)?;
     let ex = InProcessExchange::new();
     let info = links::fibre_component();
-    let mut link = links::start(&info, Some(&ex), "check").map_err(|e| fail(e.to_string()))?;
+    let mut link = links::start(&info, Some(&ex), "check", links::DEFAULT_NODE_TIMEOUT)
+        .map_err(|e| fail(e.to_string()))?;
     let description = describe(link.as_mut())?;
     check_fit(scene, &plan, &description)?;
     let configured = configure(link.as_mut(), scene)?;
@@ -216,7 +237,8 @@ pub fn run(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError
     }
     let prefix = cosim::ipc::new_run_prefix();
     let info = links::fibre_component();
-    let mut fibre = links::start(&info, in_process, &prefix).map_err(|e| fail(e.to_string()))?;
+    let mut fibre = links::start(&info, in_process, &prefix, opts.node_timeout)
+        .map_err(|e| fail(e.to_string()))?;
 
     let mut state = RunState::default();
     let outcome = drive(

@@ -178,12 +178,7 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path) -> Result<String, Strin
             .join("study")
             .join(&study.name)
             .join(i.to_string());
-        let opts = RunOptions {
-            out: run_dir,
-            in_process: !study.processes,
-            progress: false,
-            verbose: false,
-        };
+        let opts = RunOptions::quiet(run_dir, !study.processes);
         eprintln!(
             "study {}: variant {}/{}: {label}",
             study.name,

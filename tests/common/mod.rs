@@ -27,12 +27,7 @@ pub fn out_dir(test: &str) -> PathBuf {
 /// Run a scene in-process through the coordinator library; returns summary.json.
 pub fn run_in_process(cfg: &Path, overrides: &[String], test: &str) -> serde_json::Value {
     let scene = scene::load(Some(cfg), overrides).unwrap_or_else(|e| panic!("{e}"));
-    let opts = RunOptions {
-        out: out_dir(test),
-        in_process: true,
-        progress: false,
-        verbose: false,
-    };
+    let opts = RunOptions::quiet(out_dir(test), true);
     runner::run(&scene, &opts)
         .unwrap_or_else(|e| panic!("{e}"))
         .summary

@@ -3,9 +3,10 @@
 //! Usage: `fibre-node serve --prefix PREFIX --name NAME` (started by the coordinator), or
 //! `fibre-node describe` to print the model description as JSON.
 //!
-//! Testing hook: with `FIBRECOSIM_FAULT=exit-at-step:N` in the environment the node writes a
-//! line to stderr and exits with status 3 when asked to run a phase of step N, so that the
-//! coordinator's handling of a dying node can be tested.
+//! Testing hooks: with `FIBRECOSIM_FAULT=exit-at-step:N` in the environment the node writes a
+//! line to stderr and exits with status 3 when asked to run a phase of step N; with
+//! `FIBRECOSIM_FAULT=hang-at-step:N` it stops answering there. They let the coordinator's
+//! handling of a dying or unresponsive node be tested.
 use cosim::{
     Component, ComponentError, Configured, Exchange, ModelDescription, Phase, PhaseReport,
 };
@@ -13,9 +14,14 @@ use fibre_node::FibreComponent;
 use std::io::Write;
 use std::process::ExitCode;
 
+enum Fault {
+    Exit,
+    Hang,
+}
+
 struct FaultAt {
     inner: FibreComponent,
-    step: Option<u64>,
+    fault: Option<(Fault, u64)>,
 }
 
 impl Component for FaultAt {
@@ -35,9 +41,18 @@ impl Component for FaultAt {
         phase: Phase,
         ex: &mut dyn Exchange,
     ) -> Result<PhaseReport, ComponentError> {
-        if self.step == Some(step) {
-            eprintln!("fibre-node: injected fault at step {step}, phase {phase}");
-            std::process::exit(3);
+        match &self.fault {
+            Some((Fault::Exit, at)) if *at == step => {
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "fibre-node: injected fault at step {step}, phase {phase}"
+                );
+                std::process::exit(3);
+            }
+            Some((Fault::Hang, at)) if *at == step => loop {
+                std::thread::sleep(std::time::Duration::from_secs(3600));
+            },
+            _ => {}
         }
         self.inner.run_phase(step, phase, ex)
     }
@@ -70,12 +85,18 @@ fn main() -> ExitCode {
             let (Some(prefix), Some(name)) = (value("--prefix"), value("--name")) else {
                 return usage();
             };
-            let step = std::env::var("FIBRECOSIM_FAULT")
-                .ok()
-                .and_then(|f| f.strip_prefix("exit-at-step:").and_then(|n| n.parse().ok()));
+            let fault = std::env::var("FIBRECOSIM_FAULT").ok().and_then(|f| {
+                let (kind, n) = f.split_once("-at-step:")?;
+                let kind = match kind {
+                    "exit" => Fault::Exit,
+                    "hang" => Fault::Hang,
+                    _ => return None,
+                };
+                Some((kind, n.parse().ok()?))
+            });
             let mut component = FaultAt {
                 inner: FibreComponent::new(),
-                step,
+                fault,
             };
             match cosim::ipc::serve(&mut component, &prefix, &name) {
                 Ok(()) => ExitCode::SUCCESS,
