@@ -127,6 +127,22 @@ pub fn fibre_component() -> ComponentInfo {
     }
 }
 
+/// Every component this build has.
+pub fn all_components() -> Vec<ComponentInfo> {
+    vec![fibre_component()]
+}
+
+/// The components for the node kinds a plan needs, in the plan's order.
+pub fn components_for(kinds: &[&str]) -> Vec<ComponentInfo> {
+    kinds
+        .iter()
+        .filter_map(|k| match *k {
+            "fibre" => Some(fibre_component()),
+            _ => None,
+        })
+        .collect()
+}
+
 /// Where node executables are looked for: `FIBRECOSIM_NODE_DIR` if set, else the directory
 /// of the coordinator's own executable.
 pub fn executable_path(executable: &str) -> Result<PathBuf, LinkFailure> {

@@ -112,7 +112,7 @@ fn execute(cmd: Cmd) -> Result<(), String> {
         }
         Cmd::Check { config, set } => {
             let scene = scene::load(config.as_deref(), &set).map_err(|e| e.to_string())?;
-            let (plan, configured, description) =
+            let (plan, configured, descriptions) =
                 runner::check(&scene).map_err(|e| e.to_string())?;
             println!("scene:    {}", scene.name());
             let effects: Vec<String> = plan
@@ -124,7 +124,9 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             println!("effects:  {}", effects.join(", "));
             let phases: Vec<&str> = plan.schedule.iter().map(|p| p.name()).collect();
             println!("schedule: {}", phases.join(" -> "));
-            println!("nodes:    {} {}", description.name, description.version);
+            for d in &descriptions {
+                println!("node:     {} {} ({})", d.name, d.version, d.kind);
+            }
             println!("beads:    {:?}", configured.beads_per_fibre);
             println!(
                 "steps:    {} x dt {}",

@@ -68,7 +68,7 @@ pub fn describe_all(in_process: bool) -> Result<Vec<ModelDescription>, RunError>
     let ex = InProcessExchange::new();
     let prefix = cosim::ipc::new_run_prefix();
     let mut out = Vec::new();
-    for info in [links::fibre_component()] {
+    for info in links::all_components() {
         let mut link = links::start(
             &info,
             in_process.then_some(&ex),
@@ -95,16 +95,68 @@ pub fn describe_all(in_process: bool) -> Result<Vec<ModelDescription>, RunError>
 
 /// Check a scene fits the components: models, coupling scheme, phases, and each node's own
 /// reading of its tables and time-step limits. Runs nothing.
-pub fn check(scene: &LoadedScene) -> Result<(Plan, Configured, ModelDescription), RunError> {
+pub fn check(scene: &LoadedScene) -> Result<(Plan, Configured, Vec<ModelDescription>), RunError> {
     let plan = schedule::plan(scene).map_err(fail)?;
     let ex = InProcessExchange::new();
-    let info = links::fibre_component();
-    let mut link = links::start(&info, Some(&ex), "check", links::DEFAULT_NODE_TIMEOUT)
-        .map_err(|e| fail(e.to_string()))?;
-    let description = describe(link.as_mut())?;
-    check_fit(scene, &plan, &description)?;
-    let configured = configure(link.as_mut(), scene)?;
-    Ok((plan, configured, description))
+    let mut nodes = start_nodes(&plan, Some(&ex), "check", links::DEFAULT_NODE_TIMEOUT)?;
+    let configured = describe_and_configure(scene, &plan, &mut nodes)?;
+    let descriptions = nodes.iter().map(|n| n.description.clone()).collect();
+    Ok((plan, configured, descriptions))
+}
+
+/// One node of the run: its link and what it said it is.
+struct Node {
+    link: Box<dyn NodeLink>,
+    description: ModelDescription,
+}
+
+/// Start the nodes the plan needs (fibre before fluid: the fibre node publishes the initial
+/// bead states the fluid node may read when configured).
+fn start_nodes(
+    plan: &Plan,
+    in_process: Option<&InProcessExchange>,
+    prefix: &str,
+    timeout: std::time::Duration,
+) -> Result<Vec<Node>, RunError> {
+    let mut nodes = Vec::new();
+    for info in links::components_for(&plan.nodes) {
+        let mut link =
+            links::start(&info, in_process, prefix, timeout).map_err(|e| fail(e.to_string()))?;
+        let description = describe(link.as_mut())?;
+        nodes.push(Node { link, description });
+    }
+    Ok(nodes)
+}
+
+/// The model-description check, then `configure` on every node; their answers merged.
+fn describe_and_configure(
+    scene: &LoadedScene,
+    plan: &Plan,
+    nodes: &mut [Node],
+) -> Result<Configured, RunError> {
+    let mut all = Configured::default();
+    for n in nodes.iter_mut() {
+        check_fit(scene, plan, &n.description)?;
+        let c = configure(n.link.as_mut(), scene)?;
+        if n.description.kind == "fibre" {
+            all.beads_per_fibre = c.beads_per_fibre;
+        }
+        all.effects.extend(c.effects);
+        all.time_step_limits.extend(c.time_step_limits);
+        all.derived.extend(c.derived);
+    }
+    Ok(all)
+}
+
+fn shutdown_all(nodes: Vec<Node>) -> Result<(), LinkFailure> {
+    let mut first_error = Ok(());
+    for n in nodes {
+        let r = n.link.shutdown();
+        if first_error.is_ok() {
+            first_error = r;
+        }
+    }
+    first_error
 }
 
 fn describe(link: &mut dyn NodeLink) -> Result<ModelDescription, RunError> {
@@ -137,7 +189,12 @@ fn configure(link: &mut dyn NodeLink, scene: &LoadedScene) -> Result<Configured,
 
 /// The model-description check done before step 0 (the FMI-style compatibility check).
 pub fn check_fit(scene: &LoadedScene, plan: &Plan, d: &ModelDescription) -> Result<(), RunError> {
-    for (i, f) in scene.scene.fibre.iter().enumerate() {
+    let fibres = if d.kind == "fibre" {
+        scene.scene.fibre.as_slice()
+    } else {
+        &[]
+    };
+    for (i, f) in fibres.iter().enumerate() {
         let model = f.get("model").and_then(|m| m.as_str()).unwrap_or("");
         if !model.is_empty() && !d.models.iter().any(|m| m == model) {
             return Err(fail(format!(
@@ -236,22 +293,19 @@ pub fn run(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError
         cosim::ipc::cleanup_stale_resources();
     }
     let prefix = cosim::ipc::new_run_prefix();
-    let info = links::fibre_component();
-    let mut fibre = links::start(&info, in_process, &prefix, opts.node_timeout)
-        .map_err(|e| fail(e.to_string()))?;
+    let mut nodes = match start_nodes(&plan, in_process, &prefix, opts.node_timeout) {
+        Ok(n) => n,
+        Err(e) => {
+            let _ = log.finish(&json!({ "status": "failed", "error": e.message }));
+            return Err(e);
+        }
+    };
 
     let mut state = RunState::default();
     let outcome = drive(
-        scene,
-        opts,
-        &plan,
-        fibre.as_mut(),
-        in_process,
-        &prefix,
-        &mut log,
-        &mut state,
+        scene, opts, &plan, &mut nodes, in_process, &prefix, &mut log, &mut state,
     );
-    let shutdown = fibre.shutdown();
+    let shutdown = shutdown_all(nodes);
 
     let wall = started.elapsed().as_secs_f64();
     let (status, error) = match (&outcome, &shutdown) {
@@ -349,15 +403,24 @@ fn drive(
     scene: &LoadedScene,
     opts: &RunOptions,
     plan: &Plan,
-    fibre: &mut dyn NodeLink,
+    nodes: &mut [Node],
     in_process: Option<&InProcessExchange>,
     prefix: &str,
     log: &mut RunLog,
     st: &mut RunState,
 ) -> Result<&'static str, RunError> {
-    let description = describe(fibre)?;
-    check_fit(scene, plan, &description)?;
-    st.configured = configure(fibre, scene)?;
+    st.configured = describe_and_configure(scene, plan, nodes)?;
+    // Which node runs each phase of the schedule.
+    let owner: Vec<usize> = plan
+        .schedule
+        .iter()
+        .map(|p| {
+            nodes
+                .iter()
+                .position(|n| n.description.kind == p.node())
+                .ok_or_else(|| fail(format!("no node of kind `{}` runs the phase {p}", p.node())))
+        })
+        .collect::<Result<_, _>>()?;
     st.effects = plan
         .requested
         .iter()
@@ -385,13 +448,16 @@ fn drive(
         links::coordinator_exchange(in_process, prefix).map_err(|e| fail(e.to_string()))?;
     let radii = radii(scene);
     let beads = st.configured.beads_per_fibre.clone();
+    let has_beads = !beads.is_empty();
     let mut states: Vec<BeadState> = Vec::new();
-    exchange
-        .read_states(Port::BeadStates, &mut states)
-        .map_err(|e| fail(format!("reading the initial bead states: {e}")))?;
+    if has_beads {
+        exchange
+            .read_states(Port::BeadStates, &mut states)
+            .map_err(|e| fail(format!("reading the initial bead states: {e}")))?;
+        log.bead_states(0, 0.0, &beads, &radii, &states)
+            .map_err(fail)?;
+    }
     let initial = states.clone();
-    log.bead_states(0, 0.0, &beads, &radii, &states)
-        .map_err(fail)?;
 
     let dt = scene.scene.time.dt;
     let steps = scene.scene.time.steps;
@@ -401,25 +467,30 @@ fn drive(
     let mut status = "completed";
     for step in 0..steps {
         let mut report = Vec::new();
-        for &phase in &plan.schedule {
+        for (&phase, &o) in plan.schedule.iter().zip(&owner) {
             let t0 = Instant::now();
-            let reply = fibre
-                .call(&Command::RunPhase { step, phase })
-                .map_err(|e| {
-                    let detail = match &e {
-                        LinkFailure::Refused { message, .. } => message.clone(),
-                        other => other.to_string(),
-                    };
-                    fail(format!(
-                        "node `{}` failed at step {step}, phase {phase}: {detail}",
-                        fibre.name()
-                    ))
-                })?;
+            let node = &mut nodes[o].link;
+            let reply = node.call(&Command::RunPhase { step, phase }).map_err(|e| {
+                let detail = match &e {
+                    LinkFailure::Refused { message, .. } => message.clone(),
+                    other => other.to_string(),
+                };
+                fail(format!(
+                    "node `{}` failed at step {step}, phase {phase}: {detail}",
+                    node.name()
+                ))
+            })?;
             *st.seconds_per_phase
                 .entry(phase.name().to_string())
                 .or_default() += t0.elapsed().as_secs_f64();
             if let Reply::PhaseDone(r) = reply {
-                report = r.diagnostics;
+                // One value per name: a later phase's report replaces an earlier one's.
+                for (k, v) in r.diagnostics {
+                    match report.iter_mut().find(|(name, _)| *name == k) {
+                        Some(slot) => slot.1 = v,
+                        None => report.push((k, v)),
+                    }
+                }
             }
         }
         st.steps_done = step + 1;
@@ -440,11 +511,13 @@ fn drive(
             .is_some_and(|tol| is_at_rest(&st.last_diagnostics, tol, load_scale));
         let stop = INTERRUPTED.load(Ordering::SeqCst);
         if (step + 1) % interval == 0 || step + 1 == steps || at_rest || stop {
-            exchange
-                .read_states(Port::BeadStates, &mut states)
-                .map_err(|e| fail(format!("reading bead states at step {}: {e}", step + 1)))?;
-            log.bead_states(step + 1, st.time, &beads, &radii, &states)
-                .map_err(fail)?;
+            if has_beads {
+                exchange
+                    .read_states(Port::BeadStates, &mut states)
+                    .map_err(|e| fail(format!("reading bead states at step {}: {e}", step + 1)))?;
+                log.bead_states(step + 1, st.time, &beads, &radii, &states)
+                    .map_err(fail)?;
+            }
             log.diagnostics(step + 1, st.time, &st.last_diagnostics)
                 .map_err(fail)?;
             log.timings(step + 1, st.time, &st.seconds_per_phase)
@@ -462,9 +535,11 @@ fn drive(
         }
     }
     bar.finish_and_clear();
-    exchange
-        .read_states(Port::BeadStates, &mut states)
-        .map_err(|e| fail(format!("reading the final bead states: {e}")))?;
+    if has_beads {
+        exchange
+            .read_states(Port::BeadStates, &mut states)
+            .map_err(|e| fail(format!("reading the final bead states: {e}")))?;
+    }
     st.metrics = crate::metrics::compute(
         &scene.scene.analysis.metrics,
         &scene.scene,
