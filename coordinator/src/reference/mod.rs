@@ -1,2 +1,4 @@
 //! Analytic and published references the metrics are compared with.
 pub mod elastica;
+pub mod jeffery;
+pub mod periodic_array;
