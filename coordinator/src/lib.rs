@@ -10,3 +10,4 @@ pub mod runner;
 pub mod scene;
 pub mod schedule;
 pub mod study;
+pub mod trajectory;

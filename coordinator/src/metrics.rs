@@ -6,7 +6,48 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 
 /// Metric names a scene may ask for in `analysis.metrics`.
-pub const KNOWN: &[&str] = &["tip_deflection_over_length", "tip_rotation", "twist_angle"];
+pub const KNOWN: &[&str] = &[
+    "tip_deflection_over_length",
+    "tip_rotation",
+    "twist_angle",
+    "couette_max_error",
+    "drag_ratio",
+    "tumbling_period_gamma",
+    "min_end_to_end_over_length",
+];
+
+/// Metrics that need fibre 0's orientation at every step.
+pub const NEED_TRAJECTORY: &[&str] = &["tumbling_period_gamma", "min_end_to_end_over_length"];
+
+/// Everything a metric may look at, at the end of a run.
+pub struct Context<'a> {
+    pub scene: &'a crate::scene::Scene,
+    pub beads_per_fibre: &'a [usize],
+    /// Quantities the nodes derived when configured (rigidities, shear rate, ...).
+    pub derived: &'a [(String, f64)],
+    pub initial: &'a [BeadState],
+    pub last: &'a [BeadState],
+    /// Diagnostics of the last step, all nodes.
+    pub diagnostics: &'a [(String, f64)],
+    /// Impulses of the last step (fluid scenes).
+    pub impulses: &'a [cosim::BeadImpulse],
+    pub trajectory: &'a crate::trajectory::Trajectory,
+}
+
+fn lookup(list: &[(String, f64)], key: &str) -> Option<f64> {
+    list.iter().find(|(k, _)| k == key).map(|(_, v)| *v)
+}
+
+/// A metric without a reference.
+fn plain(value: f64) -> Metric {
+    Metric {
+        value,
+        reference: None,
+        relative_error: None,
+        reference_source: String::new(),
+        extra: BTreeMap::new(),
+    }
+}
 
 /// One observable with its reference.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -130,13 +171,123 @@ fn relative_rotation(initial: [f64; 4], last: [f64; 4]) -> (f64, [f64; 3]) {
 /// Compute the requested metrics for fibre 0 from its initial and final bead states.
 pub fn compute(
     names: &[String],
-    scene: &crate::scene::Scene,
-    beads_per_fibre: &[usize],
-    derived: &[(String, f64)],
-    initial: &[BeadState],
-    last: &[BeadState],
+    ctx: &Context,
     dimensionless: &mut BTreeMap<String, f64>,
 ) -> Result<BTreeMap<String, Metric>, String> {
+    let mut out = BTreeMap::new();
+    let mut beam_names = Vec::new();
+    for name in names {
+        let m = match name.as_str() {
+            "couette_max_error" => plain(
+                lookup(ctx.diagnostics, "couette_max_error")
+                    .ok_or("metric `couette_max_error` needs walls and a fluid that reports it")?,
+            ),
+            "drag_ratio" => drag_ratio(ctx)?,
+            "tumbling_period_gamma" => {
+                let gamma = lookup(ctx.derived, "fluid.shear_rate")
+                    .ok_or("metric `tumbling_period_gamma` needs walls (a shear rate)")?;
+                let period = ctx.trajectory.period().ok_or(
+                    "metric `tumbling_period_gamma`: fibre 0 did not pass the vertical twice; run longer",
+                )?;
+                let n = *ctx
+                    .beads_per_fibre
+                    .first()
+                    .ok_or("the scene has no fibre")?;
+                let mut m = Metric::with_reference(
+                    gamma * period,
+                    crate::reference::jeffery::chain_period_gamma(n),
+                    "Jeffery, equivalent ellipse e_c = 1.14 e_p^0.844 (L2020 appendix B)",
+                );
+                m.extra.insert(
+                    "passes_through_vertical".into(),
+                    ctx.trajectory.vertical_crossings().len() as f64,
+                );
+                m
+            }
+            "min_end_to_end_over_length" => plain(
+                ctx.trajectory
+                    .min_end_to_end_ratio()
+                    .ok_or("metric `min_end_to_end_over_length` needs a fibre")?,
+            ),
+            _ => {
+                beam_names.push(name.clone());
+                continue;
+            }
+        };
+        out.insert(name.clone(), m);
+    }
+    out.extend(beam_metrics(&beam_names, ctx, dimensionless)?);
+    Ok(out)
+}
+
+/// Drag on fibre 0's first bead held fixed in a periodic box driven by a body force, over the
+/// periodic-array reference at the box's solid fraction (REFERENCE.md section 2).
+fn drag_ratio(ctx: &Context) -> Result<Metric, String> {
+    let fluid = ctx
+        .scene
+        .fluid
+        .as_ref()
+        .ok_or("metric `drag_ratio` needs a fluid")?;
+    let grid: Vec<f64> = match fluid.get("grid") {
+        Some(toml::Value::Array(a)) => a
+            .iter()
+            .filter_map(|v| v.as_integer())
+            .map(|v| v as f64)
+            .collect(),
+        _ => return Err("metric `drag_ratio` needs fluid.grid".into()),
+    };
+    let eta = match fluid.get("viscosity") {
+        Some(toml::Value::Float(v)) => *v,
+        Some(toml::Value::Integer(v)) => *v as f64,
+        _ => return Err("metric `drag_ratio` needs fluid.viscosity".into()),
+    };
+    let r = ctx
+        .scene
+        .fibre
+        .first()
+        .and_then(|f| f.get("bead_radius"))
+        .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+        .ok_or("metric `drag_ratio` needs fibre 0's bead_radius")?;
+    let dt = ctx.scene.time.dt;
+    let force = -ctx
+        .impulses
+        .first()
+        .ok_or("metric `drag_ratio`: no impulses were published")?
+        .impulse[0]
+        / dt;
+    let u = lookup(ctx.diagnostics, "mean_velocity_x")
+        .ok_or("metric `drag_ratio` needs mean_velocity_x")?;
+    let volume: f64 = grid.iter().product();
+    let pi = std::f64::consts::PI;
+    let (reference_force, source, c) = if grid.len() == 2 {
+        let c = pi * r * r / volume;
+        let (k, src) = crate::reference::periodic_array::cylinder_drag(c)?;
+        (k * eta * u, src, c)
+    } else {
+        let c = 4.0 / 3.0 * pi * r.powi(3) / volume;
+        let (k, src) = crate::reference::periodic_array::sphere_drag_factor(c)?;
+        (6.0 * pi * eta * r * u * k, src, c)
+    };
+    let mut m = Metric::with_reference(force / reference_force, 1.0, source);
+    m.extra.insert("solid_fraction".into(), c);
+    m.extra.insert("drag_force".into(), force);
+    m.extra.insert("mean_velocity".into(), u);
+    Ok(m)
+}
+
+/// The fibre-alone metrics of fibre 0 (cantilever and torsion).
+fn beam_metrics(
+    names: &[String],
+    ctx: &Context,
+    dimensionless: &mut BTreeMap<String, f64>,
+) -> Result<BTreeMap<String, Metric>, String> {
+    let (scene, beads_per_fibre, derived, initial, last) = (
+        ctx.scene,
+        ctx.beads_per_fibre,
+        ctx.derived,
+        ctx.initial,
+        ctx.last,
+    );
     let mut out = BTreeMap::new();
     if names.is_empty() {
         return Ok(out);

@@ -134,6 +134,24 @@ fn describe_and_configure(
     plan: &Plan,
     nodes: &mut [Node],
 ) -> Result<Configured, RunError> {
+    for effect in &plan.requested {
+        if !nodes.iter().any(|n| n.description.effects.contains(effect)) {
+            let have: Vec<String> = nodes
+                .iter()
+                .map(|n| {
+                    format!(
+                        "{}: {}",
+                        n.description.name,
+                        n.description.effects.join(", ")
+                    )
+                })
+                .collect();
+            return Err(fail(format!(
+                "the scene asks for the effect `{effect}` but no component provides it ({})",
+                have.join("; ")
+            )));
+        }
+    }
     let mut all = Configured::default();
     for n in nodes.iter_mut() {
         check_fit(scene, plan, &n.description)?;
@@ -458,6 +476,17 @@ fn drive(
             .map_err(fail)?;
     }
     let initial = states.clone();
+    let track = has_beads
+        && scene
+            .scene
+            .analysis
+            .metrics
+            .iter()
+            .any(|m| crate::metrics::NEED_TRAJECTORY.contains(&m.as_str()));
+    let mut trajectory = crate::trajectory::Trajectory::default();
+    if track {
+        trajectory.push(0.0, &states, beads[0]);
+    }
 
     let dt = scene.scene.time.dt;
     let steps = scene.scene.time.steps;
@@ -510,6 +539,12 @@ fn drive(
             .rest_tolerance
             .is_some_and(|tol| is_at_rest(&st.last_diagnostics, tol, load_scale));
         let stop = INTERRUPTED.load(Ordering::SeqCst);
+        if track {
+            exchange
+                .read_states(Port::BeadStates, &mut states)
+                .map_err(|e| fail(format!("reading bead states at step {}: {e}", step + 1)))?;
+            trajectory.push(st.time, &states, beads[0]);
+        }
         if (step + 1) % interval == 0 || step + 1 == steps || at_rest || stop {
             if has_beads {
                 exchange
@@ -540,16 +575,25 @@ fn drive(
             .read_states(Port::BeadStates, &mut states)
             .map_err(|e| fail(format!("reading the final bead states: {e}")))?;
     }
-    st.metrics = crate::metrics::compute(
-        &scene.scene.analysis.metrics,
-        &scene.scene,
-        &beads,
-        &st.configured.derived,
-        &initial,
-        &states,
-        &mut st.dimensionless,
-    )
-    .map_err(fail)?;
+    let mut impulses = Vec::new();
+    if plan.nodes.contains(&"fluid") && has_beads {
+        exchange
+            .read_impulses(Port::BeadImpulses, &mut impulses)
+            .map_err(|e| fail(format!("reading the final impulses: {e}")))?;
+    }
+    let ctx = crate::metrics::Context {
+        scene: &scene.scene,
+        beads_per_fibre: &beads,
+        derived: &st.configured.derived,
+        initial: &initial,
+        last: &states,
+        diagnostics: &st.last_diagnostics,
+        impulses: &impulses,
+        trajectory: &trajectory,
+    };
+    st.metrics =
+        crate::metrics::compute(&scene.scene.analysis.metrics, &ctx, &mut st.dimensionless)
+            .map_err(fail)?;
     Ok(status)
 }
 
