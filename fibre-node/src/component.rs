@@ -169,7 +169,7 @@ impl Component for FibreComponent {
                 param("dimensions", "1", Some("3"), "2 (x-y plane, rotation about z, no twist) or 3"),
                 param("time.dt", "time", None, "fluid (outer) time step; the fibre takes fibre.N.substeps internal steps per dt"),
                 param("fibre.N.model", "1", None, "\"cohesive-beam\" (L2020) or \"bead-spring\" (S2023)"),
-                param("fibre.N.beads", "1", None, "number of beads N_b (at least 2)"),
+                param("fibre.N.beads", "1", None, "number of beads N_b (1: a single rigid particle)"),
                 param("fibre.N.bead_radius", len, None, "bead radius r_b"),
                 param("fibre.N.youngs_modulus", "mass / (length time^2)", None, "Young's modulus E; EI with I = pi r_b^4 / 4"),
                 param("fibre.N.shear_modulus", "mass / (length time^2)", Some("E / 2.6"), "shear modulus G (torsion, cohesive beam in 3D); default E / (2 (1 + 0.3))"),

@@ -318,9 +318,10 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
             ))
         }
     };
-    if raw.beads < 2 {
+    // One bead is a single rigid particle (e.g. a sphere in a periodic array).
+    if raw.beads < 1 {
         return Err(format!(
-            "{p}.beads: expected at least 2 beads, got {}",
+            "{p}.beads: expected at least 1 bead, got {}",
             raw.beads
         ));
     }
@@ -577,7 +578,7 @@ method = "spm"
         );
         assert_eq!(
             replace("beads = 10", "beads = 0"),
-            "fibre.0.beads: expected at least 2 beads, got 0"
+            "fibre.0.beads: expected at least 1 bead, got 0"
         );
         assert!(replace("beads = 10", "beads = 2.5").starts_with("fibre.0.beads: invalid type"));
         assert_eq!(
@@ -625,8 +626,8 @@ method = "spm"
         let ok = parse_scene(&format!("{bs}bending_stiffness = 0.5\n")).unwrap();
         assert_eq!(ok.fibres[0].bending_stiffness, Some(0.5));
         // The second fibre is named by its index.
-        let two = format!("{BASE}\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = 1\nbead_radius = 1\nyoungs_modulus = 1\n");
-        assert_eq!(err(&two), "fibre.1.beads: expected at least 2 beads, got 1");
+        let two = format!("{BASE}\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = 0\nbead_radius = 1\nyoungs_modulus = 1\n");
+        assert_eq!(err(&two), "fibre.1.beads: expected at least 1 bead, got 0");
     }
 
     #[test]
