@@ -1,0 +1,67 @@
+//! Row-parallel loops over several fields at once, and deterministic reductions.
+//!
+//! Reductions go through per-row partial results combined in row order, so a sum does not
+//! depend on how rayon splits the work or on the number of threads.
+use crate::transform::SharedPtr;
+use rayon::prelude::*;
+
+/// Most fields one [`for_each_row`] call can hand out.
+pub const MAX_FIELDS: usize = 4;
+
+/// Minimum rows per rayon task: enough to amortise a task, few enough to balance.
+fn min_len(rows: usize) -> usize {
+    (rows / (8 * rayon::current_num_threads().max(1))).max(1)
+}
+
+/// Call `f(r, rows)` for every row index `r` in parallel, where `rows[c]` is row `r` (of
+/// `row_len` elements) of `fields[c]`. All fields must have the same length, a multiple of
+/// `row_len`; at most [`MAX_FIELDS`] fields.
+pub fn for_each_row<T: Send>(
+    fields: &mut [&mut [T]],
+    row_len: usize,
+    f: impl Fn(usize, &mut [&mut [T]]) + Sync + Send,
+) {
+    let k = fields.len();
+    assert!((1..=MAX_FIELDS).contains(&k), "for_each_row: 1..=4 fields");
+    let len = fields[0].len();
+    assert!(fields.iter().all(|s| s.len() == len) && row_len > 0 && len % row_len == 0);
+    let rows = len / row_len;
+    let ptrs: [SharedPtr<T>; MAX_FIELDS] = std::array::from_fn(|c| {
+        SharedPtr(if c < k {
+            fields[c].as_mut_ptr()
+        } else {
+            std::ptr::null_mut()
+        })
+    });
+    (0..rows)
+        .into_par_iter()
+        .with_min_len(min_len(rows))
+        .for_each(|r| {
+            let ptrs = &ptrs;
+            let mut s: [&mut [T]; MAX_FIELDS] = std::array::from_fn(|c| {
+                if c < k {
+                    // SAFETY: row r of field c is handed to this call only; the fields are
+                    // distinct exclusive borrows of `len` elements.
+                    unsafe { std::slice::from_raw_parts_mut(ptrs[c].0.add(r * row_len), row_len) }
+                } else {
+                    &mut []
+                }
+            });
+            f(r, &mut s[..k]);
+        });
+}
+
+/// `out[r] = f(r)` for every row index `r < rows`, in parallel. `out` keeps its capacity, so
+/// a buffer reserved once is never reallocated.
+pub fn per_row(out: &mut Vec<f64>, rows: usize, f: impl Fn(usize) -> f64 + Sync + Send) {
+    (0..rows)
+        .into_par_iter()
+        .with_min_len(min_len(rows))
+        .map(f)
+        .collect_into_vec(out);
+}
+
+/// Sum in index order.
+pub fn ordered_sum(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |a, b| a + b)
+}
