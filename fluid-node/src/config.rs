@@ -1,0 +1,621 @@
+//! The part of the scene the fluid node reads: `dimensions`, `time.dt`, the `[fluid]` and
+//! `[walls]` tables, and from each `[[fibre]]` table only `beads` and `bead_radius` (plus
+//! `spacing` and `youngs_modulus` when present, for derived numbers). The fibre node owns and
+//! checks the other fibre keys.
+//!
+//! Units are grid units: the grid spacing is 1, lengths are in grid spacings.
+//! Every refusal names the dotted key, the value and what was expected; nothing panics.
+use serde::Deserialize;
+
+/// Default `fluid.density`.
+pub const DEFAULT_DENSITY: f64 = 1.0;
+/// Default `fluid.xi` (interface width, grid units; L2020 uses 1 and 2).
+pub const DEFAULT_XI: f64 = 1.0;
+/// Default `fluid.xi_cutoff` in units of `fluid.xi` (L2020: xi = 1, xi_c = 3).
+pub const DEFAULT_CUTOFF_OVER_XI: f64 = 3.0;
+/// Default `walls.thickness`, grid units.
+pub const DEFAULT_WALL_THICKNESS: f64 = 4.0;
+/// Smallest grid size along any axis.
+pub const MIN_GRID: i64 = 8;
+/// Largest number of grid cells accepted (512³).
+pub const MAX_CELLS: u64 = 1 << 27;
+/// Largest number of beads (all fibres together).
+pub const MAX_BEADS: i64 = 1_000_000;
+
+/// How the velocity starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InitialVelocity {
+    /// At rest.
+    Rest,
+    /// The linear profile between the walls (walls required).
+    Couette,
+}
+
+/// Two solid slabs normal to y, at the bottom and top of the periodic y range.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WallsConfig {
+    /// x-velocities of the bottom and top slab.
+    pub velocity: [f64; 2],
+    /// Slab thickness (grid units): the inner faces are at y = thickness and
+    /// y = ny - thickness.
+    pub thickness: f64,
+}
+
+/// What the fluid node needs of one `[[fibre]]` table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FibreInfo {
+    pub beads: usize,
+    pub bead_radius: f64,
+    /// Rest distance between bead centres if given (default 2 bead_radius).
+    pub spacing: f64,
+    /// Young's modulus if given (for the derived k0 / (eta gamma)).
+    pub youngs_modulus: Option<f64>,
+}
+
+impl FibreInfo {
+    /// Extent of a straight fibre, end to end: (N_b - 1) spacing + 2 r_b (= 2 r_b N_b for
+    /// touching beads).
+    pub fn length(&self) -> f64 {
+        (self.beads - 1) as f64 * self.spacing + 2.0 * self.bead_radius
+    }
+}
+
+/// The validated fluid part of a scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FluidConfig {
+    /// 2 or 3.
+    pub dimensions: usize,
+    /// `time.dt`.
+    pub dt: f64,
+    /// `[nx, ny, nz]`, `nz = 1` in 2D.
+    pub grid: [usize; 3],
+    /// Dynamic viscosity eta.
+    pub viscosity: f64,
+    /// Density rho.
+    pub density: f64,
+    /// Interface width xi (L2020 eq. 25).
+    pub xi: f64,
+    /// Cut-off xi_c (L2020 eq. 25).
+    pub xi_cutoff: f64,
+    /// Body force density, `[fx, fy, fz]` (fz = 0 in 2D).
+    pub body_force: [f64; 3],
+    pub initial_velocity: InitialVelocity,
+    pub walls: Option<WallsConfig>,
+    pub fibres: Vec<FibreInfo>,
+}
+
+impl FluidConfig {
+    /// Kinematic viscosity nu = eta / rho.
+    pub fn kinematic_viscosity(&self) -> f64 {
+        self.viscosity / self.density
+    }
+
+    /// Total number of beads.
+    pub fn total_beads(&self) -> usize {
+        self.fibres.iter().map(|f| f.beads).sum()
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFluid {
+    method: String,
+    grid: Vec<i64>,
+    viscosity: f64,
+    density: Option<f64>,
+    xi: Option<f64>,
+    xi_cutoff: Option<f64>,
+    body_force: Option<Vec<f64>>,
+    initial_velocity: Option<String>,
+    binary: Option<toml::Value>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawWalls {
+    velocity: Vec<f64>,
+    thickness: Option<f64>,
+}
+
+fn positive(path: &str, v: f64) -> Result<f64, String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{path}: expected a positive number, got {v}"))
+    }
+}
+
+/// Turn a serde error at `path` (relative to `prefix`) into a user message naming the key.
+fn serde_message(prefix: &str, path: &serde_path_to_error::Path, msg: &str) -> String {
+    let mut full = prefix.to_string();
+    for seg in path.iter() {
+        match seg {
+            serde_path_to_error::Segment::Seq { index } => full.push_str(&format!(".{index}")),
+            serde_path_to_error::Segment::Map { key } => full.push_str(&format!(".{key}")),
+            serde_path_to_error::Segment::Enum { variant } => full.push_str(&format!(".{variant}")),
+            serde_path_to_error::Segment::Unknown => {}
+        }
+    }
+    let msg = msg.lines().next().unwrap_or("").trim_end();
+    let quoted = msg.split('`').nth(1).unwrap_or("");
+    if msg.starts_with("unknown field ") {
+        let table = full
+            .strip_suffix(&format!(".{quoted}"))
+            .unwrap_or(&full)
+            .to_string();
+        let expected = msg
+            .split_once(", expected ")
+            .map(|(_, e)| format!(" (expected {e})"))
+            .unwrap_or_default();
+        return format!("{table}: unknown key `{quoted}`{expected}");
+    }
+    if msg.starts_with("missing field ") {
+        return format!("{full}.{quoted}: required key is missing");
+    }
+    let msg = msg
+        .replace("expected f64", "expected a number")
+        .replace("expected i64", "expected an integer")
+        .replace("expected a sequence", "expected an array");
+    format!("{full}: {msg}")
+}
+
+fn deserialize<T: for<'de> Deserialize<'de>>(prefix: &str, v: toml::Value) -> Result<T, String> {
+    serde_path_to_error::deserialize(v).map_err(|e| {
+        let path = e.path().clone();
+        let inner = e.into_inner();
+        serde_message(prefix, &path, &inner.to_string())
+    })
+}
+
+fn describe_toml(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => format!("the string {s:?}"),
+        toml::Value::Table(_) => "a table".into(),
+        toml::Value::Array(_) => "an array".into(),
+        other => other.to_string(),
+    }
+}
+
+fn number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+fn fmt_list<T: std::fmt::Display>(v: &[T]) -> String {
+    let items: Vec<String> = v.iter().map(|x| x.to_string()).collect();
+    format!("[{}]", items.join(", "))
+}
+
+/// Read the fluid node's part of a scene.
+pub fn parse_scene(scene_toml: &str) -> Result<FluidConfig, String> {
+    let table: toml::Table = scene_toml
+        .parse()
+        .map_err(|e: toml::de::Error| format!("the scene is not valid TOML: {e}"))?;
+
+    let dimensions = match table.get("dimensions") {
+        None => 3,
+        Some(toml::Value::Integer(2)) => 2,
+        Some(toml::Value::Integer(3)) => 3,
+        Some(v) => {
+            return Err(format!(
+                "dimensions: expected 2 or 3, got {}",
+                describe_toml(v)
+            ))
+        }
+    };
+
+    let dt = match table.get("time") {
+        None => return Err("time.dt: required key is missing (no [time] table)".into()),
+        Some(toml::Value::Table(t)) => match t.get("dt") {
+            None => return Err("time.dt: required key is missing".into()),
+            Some(v) => match number(v) {
+                Some(x) => positive("time.dt", x)?,
+                None => {
+                    return Err(format!(
+                        "time.dt: expected a positive number, got {}",
+                        describe_toml(v)
+                    ))
+                }
+            },
+        },
+        Some(v) => return Err(format!("time: expected a table, got {}", describe_toml(v))),
+    };
+
+    let fluid =
+        match table.get("fluid") {
+            None => return Err(
+                "fluid: the scene has no [fluid] table, so the fluid node has nothing to simulate"
+                    .into(),
+            ),
+            Some(v @ toml::Value::Table(_)) => v.clone(),
+            Some(v) => return Err(format!("fluid: expected a table, got {}", describe_toml(v))),
+        };
+    let raw: RawFluid = deserialize("fluid", fluid)?;
+    if raw.binary.is_some() {
+        return Err(
+            "fluid.binary: a binary fluid needs the ternary Cahn–Hilliard model, and \
+             Cahn–Hilliard is not available yet in fluid-node; remove [fluid.binary] to \
+             simulate a single fluid"
+                .into(),
+        );
+    }
+    if raw.method != "spm" {
+        return Err(format!(
+            "fluid.method: expected \"spm\" (the Smoothed Profile Method; FPD on \
+             lattice Boltzmann is not available yet), got {:?}",
+            raw.method
+        ));
+    }
+    if raw.grid.len() != dimensions {
+        let want = if dimensions == 2 {
+            "[nx, ny]"
+        } else {
+            "[nx, ny, nz]"
+        };
+        return Err(format!(
+            "fluid.grid: a {dimensions}D scene expects {want}, got {}",
+            fmt_list(&raw.grid)
+        ));
+    }
+    let mut grid = [1usize; 3];
+    let mut cells: u64 = 1;
+    for (a, &n) in raw.grid.iter().enumerate() {
+        if n < MIN_GRID {
+            return Err(format!(
+                "fluid.grid: expected sizes of at least {MIN_GRID} along every axis, got {}",
+                fmt_list(&raw.grid)
+            ));
+        }
+        cells = cells.saturating_mul(n as u64);
+        if cells > MAX_CELLS {
+            return Err(format!(
+                "fluid.grid: expected at most {MAX_CELLS} cells in all, got {}",
+                fmt_list(&raw.grid)
+            ));
+        }
+        grid[a] = n as usize;
+    }
+    let viscosity = positive("fluid.viscosity", raw.viscosity)?;
+    let density = match raw.density {
+        Some(x) => positive("fluid.density", x)?,
+        None => DEFAULT_DENSITY,
+    };
+    let xi = match raw.xi {
+        Some(x) => positive("fluid.xi", x)?,
+        None => DEFAULT_XI,
+    };
+    let xi_cutoff = match raw.xi_cutoff {
+        Some(x) => positive("fluid.xi_cutoff", x)?,
+        None => DEFAULT_CUTOFF_OVER_XI * xi,
+    };
+    let mut body_force = [0.0; 3];
+    if let Some(f) = &raw.body_force {
+        if f.len() != dimensions || f.iter().any(|x| !x.is_finite()) {
+            let want = if dimensions == 2 {
+                "[fx, fy]"
+            } else {
+                "[fx, fy, fz]"
+            };
+            return Err(format!(
+                "fluid.body_force: expected {want} (finite numbers), got {}",
+                fmt_list(f)
+            ));
+        }
+        body_force[..dimensions].copy_from_slice(f);
+    }
+
+    let walls = match table.get("walls") {
+        None => None,
+        Some(v @ toml::Value::Table(_)) => {
+            let raw: RawWalls = deserialize("walls", v.clone())?;
+            if raw.velocity.len() != 2 || raw.velocity.iter().any(|x| !x.is_finite()) {
+                return Err(format!(
+                    "walls.velocity: expected [bottom, top] (two finite numbers), got {}",
+                    fmt_list(&raw.velocity)
+                ));
+            }
+            let thickness = match raw.thickness {
+                Some(t) => positive("walls.thickness", t)?,
+                None => DEFAULT_WALL_THICKNESS,
+            };
+            let gap = grid[1] as f64 - 2.0 * thickness;
+            let need = 2.0 * xi_cutoff + 2.0;
+            if gap < need {
+                return Err(format!(
+                    "walls.thickness: {thickness} leaves a gap of {gap} grid units between the \
+                     walls' inner faces in a grid of ny = {}, expected at least {need} \
+                     (2 fluid.xi_cutoff + 2)",
+                    grid[1]
+                ));
+            }
+            Some(WallsConfig {
+                velocity: [raw.velocity[0], raw.velocity[1]],
+                thickness,
+            })
+        }
+        Some(v) => return Err(format!("walls: expected a table, got {}", describe_toml(v))),
+    };
+
+    let initial_velocity = match raw.initial_velocity.as_deref() {
+        None | Some("rest") => InitialVelocity::Rest,
+        Some("couette") if walls.is_some() => InitialVelocity::Couette,
+        Some("couette") => {
+            return Err(
+                "fluid.initial_velocity: \"couette\" needs a [walls] table (the linear \
+                 profile runs between the walls)"
+                    .into(),
+            )
+        }
+        Some(other) => {
+            return Err(format!(
+                "fluid.initial_velocity: expected \"rest\" or \"couette\", got {other:?}"
+            ))
+        }
+    };
+
+    let fibres = parse_fibres(&table, dimensions, &grid, xi_cutoff)?;
+
+    Ok(FluidConfig {
+        dimensions,
+        dt,
+        grid,
+        viscosity,
+        density,
+        xi,
+        xi_cutoff,
+        body_force,
+        initial_velocity,
+        walls,
+        fibres,
+    })
+}
+
+/// `beads`, `bead_radius` (and `spacing`, `youngs_modulus` if they are numbers) of each
+/// `[[fibre]]` table; the fibre node checks the rest.
+fn parse_fibres(
+    table: &toml::Table,
+    dims: usize,
+    grid: &[usize; 3],
+    xi_cutoff: f64,
+) -> Result<Vec<FibreInfo>, String> {
+    let list = match table.get("fibre") {
+        None => return Ok(Vec::new()),
+        Some(toml::Value::Array(a)) => a,
+        Some(v) => {
+            return Err(format!(
+                "fibre: expected an array of tables ([[fibre]]), got {}",
+                describe_toml(v)
+            ))
+        }
+    };
+    let mut out = Vec::with_capacity(list.len());
+    let mut total: i64 = 0;
+    for (n, v) in list.iter().enumerate() {
+        let p = format!("fibre.{n}");
+        let Some(t) = v.as_table() else {
+            return Err(format!("{p}: expected a table, got {}", describe_toml(v)));
+        };
+        let beads = match t.get("beads") {
+            None => return Err(format!("{p}.beads: required key is missing")),
+            Some(toml::Value::Integer(b)) if (1..=MAX_BEADS).contains(b) => *b,
+            Some(v) => {
+                return Err(format!(
+                    "{p}.beads: expected an integer in 1..={MAX_BEADS}, got {}",
+                    describe_toml(v)
+                ))
+            }
+        };
+        total += beads;
+        if total > MAX_BEADS {
+            return Err(format!(
+                "{p}.beads: expected at most {MAX_BEADS} beads in all fibres together, got {total}"
+            ));
+        }
+        let bead_radius = match t.get("bead_radius") {
+            None => return Err(format!("{p}.bead_radius: required key is missing")),
+            Some(v) => match number(v) {
+                Some(x) => positive(&format!("{p}.bead_radius"), x)?,
+                None => {
+                    return Err(format!(
+                        "{p}.bead_radius: expected a positive number, got {}",
+                        describe_toml(v)
+                    ))
+                }
+            },
+        };
+        // A bead's cut-off box must not wrap onto itself in the periodic grid.
+        let reach = bead_radius + xi_cutoff;
+        let need = ((2.0 * reach).floor() as usize).saturating_add(2);
+        let smallest = grid[..dims].iter().copied().min().unwrap_or(0);
+        if smallest < need {
+            return Err(format!(
+                "{p}.bead_radius: {bead_radius} plus fluid.xi_cutoff {xi_cutoff} needs a grid \
+                 of at least {need} nodes along every axis, fluid.grid has {smallest}"
+            ));
+        }
+        let spacing = t
+            .get("spacing")
+            .and_then(number)
+            .filter(|s| s.is_finite() && *s > 0.0)
+            .unwrap_or(2.0 * bead_radius);
+        let youngs_modulus = t
+            .get("youngs_modulus")
+            .and_then(number)
+            .filter(|e| e.is_finite() && *e > 0.0);
+        out.push(FibreInfo {
+            beads: beads as usize,
+            bead_radius,
+            spacing,
+            youngs_modulus,
+        });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BASE: &str = r#"
+dimensions = 2
+[time]
+dt = 0.1
+steps = 10
+[fluid]
+method = "spm"
+grid = [32, 24]
+viscosity = 0.5
+"#;
+
+    fn err(scene: &str) -> String {
+        match parse_scene(scene) {
+            Ok(_) => panic!("accepted:\n{scene}"),
+            Err(e) => e,
+        }
+    }
+
+    #[test]
+    fn defaults() {
+        let c = parse_scene(BASE).unwrap();
+        assert_eq!(c.dimensions, 2);
+        assert_eq!(c.grid, [32, 24, 1]);
+        assert_eq!(c.density, 1.0);
+        assert_eq!(c.xi, 1.0);
+        assert_eq!(c.xi_cutoff, 3.0);
+        assert_eq!(c.body_force, [0.0; 3]);
+        assert_eq!(c.initial_velocity, InitialVelocity::Rest);
+        assert!(c.walls.is_none() && c.fibres.is_empty());
+        let c = parse_scene(&BASE.replace("dt = 0.1", "dt = 1").replace("xi", "x")).unwrap();
+        assert_eq!(c.dt, 1.0);
+    }
+
+    #[test]
+    fn full_scene() {
+        let s = format!(
+            "{BASE}density = 2\nxi = 2\nbody_force = [1e-4, 0]\ninitial_velocity = \"couette\"\n\
+             [walls]\nvelocity = [-0.01, 0.01]\nthickness = 3\n\
+             [[fibre]]\nmodel = \"cohesive-beam\"\nbeads = 3\nbead_radius = 2.5\nyoungs_modulus = 10\nclamp = [0]\n\
+             [[fibre]]\nbeads = 2\nbead_radius = 1\nspacing = 3\n"
+        );
+        let c = parse_scene(&s).unwrap();
+        assert_eq!(c.xi_cutoff, 6.0);
+        assert_eq!(c.body_force, [1e-4, 0.0, 0.0]);
+        assert_eq!(c.initial_velocity, InitialVelocity::Couette);
+        assert_eq!(
+            c.walls,
+            Some(WallsConfig {
+                velocity: [-0.01, 0.01],
+                thickness: 3.0
+            })
+        );
+        assert_eq!(c.fibres.len(), 2);
+        assert_eq!(c.fibres[0].youngs_modulus, Some(10.0));
+        assert_eq!(c.fibres[0].length(), 15.0);
+        assert_eq!(c.fibres[1].length(), 5.0);
+        assert_eq!(c.total_beads(), 5);
+        assert_eq!(c.kinematic_viscosity(), 0.25);
+    }
+
+    #[test]
+    fn refusals_name_the_key_the_value_and_what_was_expected() {
+        let cases: &[(&str, &str)] = &[
+            ("foo = 1", "fluid: unknown key `foo`"),
+            ("density = -1", "fluid.density: expected a positive number, got -1"),
+            ("xi = 0", "fluid.xi: expected a positive number, got 0"),
+            ("xi_cutoff = nan", "fluid.xi_cutoff: expected a positive number, got NaN"),
+            ("body_force = [1, 2, 3]", "fluid.body_force: expected [fx, fy] (finite numbers), got [1, 2, 3]"),
+            ("body_force = 3", "fluid.body_force: invalid type: integer `3`, expected an array"),
+            ("initial_velocity = \"couette\"", "fluid.initial_velocity: \"couette\" needs a [walls] table"),
+            ("initial_velocity = \"poiseuille\"", "fluid.initial_velocity: expected \"rest\" or \"couette\", got \"poiseuille\""),
+            ("[fluid.binary]\nmobility = 1", "fluid.binary: a binary fluid needs the ternary Cahn–Hilliard model, and Cahn–Hilliard is not available yet"),
+            ("[walls]\nvelocity = [0, 1]\nspeed = 2", "walls: unknown key `speed`"),
+            ("[walls]\nvelocity = [0, 1, 2]", "walls.velocity: expected [bottom, top] (two finite numbers), got [0, 1, 2]"),
+            ("[walls]\nthickness = 2", "walls.velocity: required key is missing"),
+            ("[walls]\nvelocity = [0, 1]\nthickness = 9", "walls.thickness: 9 leaves a gap of 6 grid units between the walls' inner faces in a grid of ny = 24, expected at least 8"),
+            ("[walls]\nvelocity = [0, inf]", "walls.velocity: expected [bottom, top] (two finite numbers), got [0, inf]"),
+            ("[[fibre]]\nbead_radius = 1", "fibre.0.beads: required key is missing"),
+            ("[[fibre]]\nbeads = 0\nbead_radius = 1", "fibre.0.beads: expected an integer in 1..=1000000, got 0"),
+            ("[[fibre]]\nbeads = 2\nbead_radius = \"big\"", "fibre.0.bead_radius: expected a positive number, got the string \"big\""),
+            ("[[fibre]]\nbeads = 2\nbead_radius = 9", "fibre.0.bead_radius: 9 plus fluid.xi_cutoff 3 needs a grid of at least 26 nodes along every axis, fluid.grid has 24"),
+        ];
+        for (extra, want) in cases {
+            let e = err(&format!("{BASE}{extra}\n"));
+            assert!(e.starts_with(want), "{extra}\n got: {e}\nwant: {want}");
+        }
+    }
+
+    #[test]
+    fn refusals_of_required_and_top_level_keys() {
+        let replace = |from: &str, to: &str| err(&BASE.replace(from, to));
+        assert_eq!(
+            replace("method = \"spm\"", "method = \"lbm\""),
+            "fluid.method: expected \"spm\" (the Smoothed Profile Method; FPD on lattice \
+             Boltzmann is not available yet), got \"lbm\""
+        );
+        assert_eq!(
+            replace("method = \"spm\"\n", ""),
+            "fluid.method: required key is missing"
+        );
+        assert_eq!(
+            replace("[32, 24]", "[32, 24, 8]"),
+            "fluid.grid: a 2D scene expects [nx, ny], got [32, 24, 8]"
+        );
+        assert_eq!(
+            replace("[32, 24]", "[32, 4]"),
+            "fluid.grid: expected sizes of at least 8 along every axis, got [32, 4]"
+        );
+        assert!(replace("[32, 24]", "[32, 2.5]").starts_with("fluid.grid.1: invalid type"));
+        assert_eq!(
+            replace("[32, 24]", "[65536, 65536]"),
+            "fluid.grid: expected at most 134217728 cells in all, got [65536, 65536]"
+        );
+        assert_eq!(
+            replace("viscosity = 0.5", "viscosity = 0"),
+            "fluid.viscosity: expected a positive number, got 0"
+        );
+        assert_eq!(
+            replace("dimensions = 2", "dimensions = 1"),
+            "dimensions: expected 2 or 3, got 1"
+        );
+        assert_eq!(
+            replace("dimensions = 2", ""),
+            "fluid.grid: a 3D scene expects [nx, ny, nz], got [32, 24]"
+        );
+        assert_eq!(
+            replace("dt = 0.1", "dt = -0.1"),
+            "time.dt: expected a positive number, got -0.1"
+        );
+        assert_eq!(
+            replace("dt = 0.1", "dt = \"x\""),
+            "time.dt: expected a positive number, got the string \"x\""
+        );
+        assert!(replace("[fluid]", "[fluidx]").starts_with("fluid: the scene has no [fluid] table"));
+        assert!(err("x = [").starts_with("the scene is not valid TOML"));
+        assert!(err(&format!(
+            "{BASE}[[fibre]]\nbeads = 2\nbead_radius = 1\n[[fibre]]\nbeads = -3\nbead_radius = 1\n"
+        ))
+        .starts_with("fibre.1.beads: expected an integer"));
+    }
+
+    #[test]
+    fn never_panics_on_odd_input() {
+        let odd = [
+            "",
+            "[fluid]",
+            "fluid = 3\n[time]\ndt = 1",
+            "[time]\ndt = 1\n[fluid]\nmethod = \"spm\"\ngrid = [-9223372036854775808, 8, 8]\nviscosity = 1",
+            "[time]\ndt = 1\n[fluid]\nmethod = \"spm\"\ngrid = [9223372036854775807, 9223372036854775807, 8]\nviscosity = 1",
+            "[time]\ndt = 1\n[fluid]\nmethod = \"spm\"\ngrid = [8, 8, 8]\nviscosity = 1\n[walls]\nvelocity = [0, 0]\nthickness = 1e308",
+            "[time]\ndt = 1\n[fluid]\nmethod = \"spm\"\ngrid = [8, 8, 8]\nviscosity = 1\nfibre = 3",
+            "[time]\ndt = 1\n[fluid]\nmethod = \"spm\"\ngrid = [8, 8, 8]\nviscosity = 1\n[[fibre]]\nbeads = 9223372036854775807\nbead_radius = 1",
+            "[time]\ndt = 1\n[fluid]\nmethod = \"spm\"\ngrid = [8, 8, 8]\nviscosity = 1\n[[fibre]]\nbeads = 1\nbead_radius = 1e308",
+            "[time]\ndt = 1\n[fluid]\nmethod = \"spm\"\ngrid = [8, 8, 8]\nviscosity = 1\nwalls = 1",
+        ];
+        for s in odd {
+            assert!(parse_scene(s).is_err(), "{s}");
+        }
+    }
+}
