@@ -3,3 +3,4 @@
 pub use coordinator;
 pub use cosim;
 pub use fibre_node;
+pub use fluid_node;

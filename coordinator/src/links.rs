@@ -127,9 +127,17 @@ pub fn fibre_component() -> ComponentInfo {
     }
 }
 
+pub fn fluid_component() -> ComponentInfo {
+    ComponentInfo {
+        name: "fluid-node",
+        executable: "fluid-node",
+        build: || Box::new(fluid_node::FluidComponent::new()),
+    }
+}
+
 /// Every component this build has.
 pub fn all_components() -> Vec<ComponentInfo> {
-    vec![fibre_component()]
+    vec![fibre_component(), fluid_component()]
 }
 
 /// The components for the node kinds a plan needs, in the plan's order.
@@ -138,6 +146,7 @@ pub fn components_for(kinds: &[&str]) -> Vec<ComponentInfo> {
         .iter()
         .filter_map(|k| match *k {
             "fibre" => Some(fibre_component()),
+            "fluid" => Some(fluid_component()),
             _ => None,
         })
         .collect()

@@ -64,6 +64,12 @@ enum Cmd {
 }
 
 fn main() -> ExitCode {
+    // Behave like other command-line tools when the reader of stdout goes away (`| head`):
+    // end quietly instead of panicking on a broken pipe.
+    // SAFETY: setting a signal disposition to its default at start-up, before any thread.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let _ = ctrlc::set_handler(runner::request_stop);
     match execute(cli.command) {
@@ -115,12 +121,12 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             let (plan, configured, descriptions) =
                 runner::check(&scene).map_err(|e| e.to_string())?;
             println!("scene:    {}", scene.name());
-            let effects: Vec<String> = plan
-                .requested
-                .iter()
-                .chain(configured.effects.iter())
-                .cloned()
-                .collect();
+            let mut effects = plan.requested.clone();
+            for e in &configured.effects {
+                if !effects.contains(e) {
+                    effects.push(e.clone());
+                }
+            }
             println!("effects:  {}", effects.join(", "));
             let phases: Vec<&str> = plan.schedule.iter().map(|p| p.name()).collect();
             println!("schedule: {}", phases.join(" -> "));

@@ -159,7 +159,11 @@ fn describe_and_configure(
         if n.description.kind == "fibre" {
             all.beads_per_fibre = c.beads_per_fibre;
         }
-        all.effects.extend(c.effects);
+        for e in c.effects {
+            if !all.effects.contains(&e) {
+                all.effects.push(e);
+            }
+        }
         all.time_step_limits.extend(c.time_step_limits);
         all.derived.extend(c.derived);
     }
@@ -439,12 +443,12 @@ fn drive(
                 .ok_or_else(|| fail(format!("no node of kind `{}` runs the phase {p}", p.node())))
         })
         .collect::<Result<_, _>>()?;
-    st.effects = plan
-        .requested
-        .iter()
-        .cloned()
-        .chain(st.configured.effects.iter().cloned())
-        .collect();
+    st.effects = plan.requested.clone();
+    for e in &st.configured.effects {
+        if !st.effects.contains(e) {
+            st.effects.push(e.clone());
+        }
+    }
     let schedule_names: Vec<String> = plan.schedule.iter().map(|p| p.name().to_string()).collect();
     if opts.verbose {
         eprintln!("scene:    {}", scene.name());
