@@ -1,9 +1,25 @@
-//! Eulerian solvers served as a co-simulation component: the L2020 Smoothed Profile Method.
+//! Eulerian solvers served as a co-simulation component: the Smoothed Profile Method of
+//! L2020 (Lecrivain et al. 2020) on a periodic pseudo-spectral Navier–Stokes solver.
+//!
+//! - [`spectral_ns`]: the flow solver (exact viscous decay, dealiased advection, projection;
+//!   L2020 eq. 34) on [`transform`]'s planned real FFTs over a [`grid::Grid`];
+//! - [`smoothed_profile`]: a bead's truncated tanh profile (L2020 eq. 25);
+//! - [`spm`]: the solid fraction (eq. 26), momentum exchange (eqs. 35–36), penalty (37–38);
+//! - [`walls`]: two moving slabs normal to y and the Couette reference;
+//! - [`stability`]: time-step limits; [`config`]: the `[fluid]`/`[walls]` part of a scene;
+//! - [`component`]: [`FluidComponent`], the [`cosim::Component`] the executable serves.
+pub mod component;
 pub mod config;
 pub mod grid;
 pub mod parallel;
 pub mod smoothed_profile;
 pub mod spectral_ns;
 pub mod spm;
+pub mod stability;
 pub mod transform;
 pub mod walls;
+
+pub use component::{FluidComponent, COUETTE_DIAGNOSTIC, DIAGNOSTICS, EXCHANGE_DIAGNOSTICS};
+pub use config::{parse_scene, FluidConfig};
+pub use grid::Grid;
+pub use spectral_ns::SpectralNs;

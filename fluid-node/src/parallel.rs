@@ -8,9 +8,16 @@ use rayon::prelude::*;
 /// Most fields one [`for_each_row`] call can hand out.
 pub const MAX_FIELDS: usize = 4;
 
-/// Minimum rows per rayon task: enough to amortise a task, few enough to balance.
-fn min_len(rows: usize) -> usize {
-    (rows / (8 * rayon::current_num_threads().max(1))).max(1)
+/// Elements below which splitting work across threads costs more than it saves (a rayon
+/// task costs microseconds; a small grid's whole step is a few hundred microseconds).
+pub const GRAIN: usize = 16_384;
+
+/// Minimum rows of `row_len` elements per rayon task: at least [`GRAIN`] elements, and few
+/// enough tasks (eight per thread) to balance.
+pub fn min_len(rows: usize, row_len: usize) -> usize {
+    (rows / (8 * rayon::current_num_threads().max(1)))
+        .max(GRAIN.div_ceil(row_len.max(1)))
+        .max(1)
 }
 
 /// Call `f(r, rows)` for every row index `r` in parallel, where `rows[c]` is row `r` (of
@@ -35,7 +42,7 @@ pub fn for_each_row<T: Send>(
     });
     (0..rows)
         .into_par_iter()
-        .with_min_len(min_len(rows))
+        .with_min_len(min_len(rows, row_len))
         .for_each(|r| {
             let ptrs = &ptrs;
             let mut s: [&mut [T]; MAX_FIELDS] = std::array::from_fn(|c| {
@@ -51,12 +58,17 @@ pub fn for_each_row<T: Send>(
         });
 }
 
-/// `out[r] = f(r)` for every row index `r < rows`, in parallel. `out` keeps its capacity, so
-/// a buffer reserved once is never reallocated.
-pub fn per_row(out: &mut Vec<f64>, rows: usize, f: impl Fn(usize) -> f64 + Sync + Send) {
+/// `out[r] = f(r)` for every row index `r < rows` (of `row_len` elements), in parallel.
+/// `out` keeps its capacity, so a buffer reserved once is never reallocated.
+pub fn per_row(
+    out: &mut Vec<f64>,
+    rows: usize,
+    row_len: usize,
+    f: impl Fn(usize) -> f64 + Sync + Send,
+) {
     (0..rows)
         .into_par_iter()
-        .with_min_len(min_len(rows))
+        .with_min_len(min_len(rows, row_len))
         .map(f)
         .collect_into_vec(out);
 }

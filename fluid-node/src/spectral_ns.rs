@@ -18,7 +18,7 @@
 //! The spectral velocity `û` is the state; the real velocity is always the inverse transform
 //! of `û` (a deterministic function of it), so saving `û` saves everything.
 use crate::grid::{Grid, Wavenumbers};
-use crate::parallel::{for_each_row, ordered_sum, per_row};
+use crate::parallel::{for_each_row, ordered_sum, per_row, GRAIN};
 use crate::transform::Transform;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -168,7 +168,9 @@ impl SpectralNs {
         let g = self.grid;
         let d = g.dims;
         for h in self.nl_hat.iter_mut() {
-            h.par_iter_mut().for_each(|v| *v = Complex64::default());
+            h.par_iter_mut()
+                .with_min_len(GRAIN)
+                .for_each(|v| *v = Complex64::default());
         }
         for a in 0..d {
             for b in a..d {
@@ -177,6 +179,7 @@ impl SpectralNs {
                     self.scratch
                         .par_iter_mut()
                         .zip(ua.par_iter().zip(ub.par_iter()))
+                        .with_min_len(GRAIN)
                         .for_each(|(p, (x, y))| *p = x * y);
                 }
                 self.transform.forward(&self.scratch, &mut self.tmp_hat);
@@ -292,7 +295,7 @@ impl SpectralNs {
     pub fn kinetic_energy(&mut self, rho: f64) -> f64 {
         let g = self.grid;
         let u = &self.u;
-        per_row(&mut self.partials, g.rows(), |r| {
+        per_row(&mut self.partials, g.rows(), g.nx, |r| {
             let mut s = 0.0;
             for comp in u {
                 for v in &comp[r * g.nx..(r + 1) * g.nx] {
@@ -308,7 +311,7 @@ impl SpectralNs {
     pub fn max_speed(&mut self) -> f64 {
         let g = self.grid;
         let u = &self.u;
-        per_row(&mut self.partials, g.rows(), |r| {
+        per_row(&mut self.partials, g.rows(), g.nx, |r| {
             let mut m: f64 = 0.0;
             for i in r * g.nx..(r + 1) * g.nx {
                 let mut s = 0.0;
@@ -359,7 +362,7 @@ impl SpectralNs {
         });
         self.transform.inverse(&self.tmp_hat, &mut self.scratch);
         let s = &self.scratch;
-        per_row(&mut self.partials, g.rows(), |r| {
+        per_row(&mut self.partials, g.rows(), g.nx, |r| {
             s[r * g.nx..(r + 1) * g.nx]
                 .iter()
                 .fold(0.0f64, |m, v| m.max(v.abs()))
@@ -371,7 +374,7 @@ impl SpectralNs {
     pub fn plane_average(&mut self, c: usize, out: &mut [f64]) {
         let g = self.grid;
         let u = &self.u[c];
-        per_row(&mut self.partials, g.rows(), |r| {
+        per_row(&mut self.partials, g.rows(), g.nx, |r| {
             ordered_sum(&u[r * g.nx..(r + 1) * g.nx])
         });
         let norm = 1.0 / (g.nx * g.nz) as f64;

@@ -12,6 +12,7 @@
 //! exchange, n+1 in the penalty). In 2D only x, y of X and V and the z component of Omega
 //! are used; the angular impulse is along z.
 use crate::grid::Grid;
+use crate::parallel::{min_len, GRAIN};
 use crate::smoothed_profile::BeadProfile;
 use crate::walls::Walls;
 use cosim::{BeadImpulse, BeadState};
@@ -100,6 +101,7 @@ impl Spm {
         let walls = &self.walls;
         self.phi
             .par_chunks_mut(nx)
+            .with_min_len(min_len(g.rows(), nx))
             .enumerate()
             .for_each(|(r, row)| {
                 let p = walls.as_ref().map_or(0.0, |w| w.phi(r % g.ny));
@@ -205,6 +207,7 @@ impl Spm {
                 .par_chunks_mut(nx)
                 .zip(u_c.par_chunks(nx))
                 .zip(phi.par_chunks(nx))
+                .with_min_len(min_len(g.rows(), nx))
                 .enumerate()
                 .for_each(|(r, ((o, u), p))| {
                     let y = r % g.ny;
@@ -218,7 +221,10 @@ impl Spm {
                         o.fill(0.0);
                     }
                 }),
-            None => out.par_iter_mut().for_each(|v| *v = 0.0),
+            None => out
+                .par_iter_mut()
+                .with_min_len(GRAIN)
+                .for_each(|v| *v = 0.0),
         }
         for (b, s) in self.beads.iter().zip(states) {
             b.for_each(g, |i, r, p| {

@@ -13,6 +13,7 @@
 //! allocates nothing. Every line is transformed by the same plan whatever the split, so the
 //! result does not depend on the number of threads.
 use crate::grid::Grid;
+use crate::parallel::GRAIN;
 use rayon::prelude::*;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex64;
@@ -63,7 +64,8 @@ struct Columns {
 
 impl Transform {
     /// Plan the transforms of `grid` and allocate workspaces for `groups` parallel tasks
-    /// (`0`: four per rayon thread).
+    /// (`0`: four per rayon thread, fewer for small grids so that a task has at least
+    /// [`GRAIN`] values).
     pub fn new(grid: Grid, groups: usize) -> Self {
         let mut rp = RealFftPlanner::<f64>::new();
         let r2c = rp.plan_fft_forward(grid.nx);
@@ -77,7 +79,9 @@ impl Transform {
             scratch = scratch.max(f.get_inplace_scratch_len());
         }
         let groups = if groups == 0 {
-            4 * rayon::current_num_threads().max(1)
+            (4 * rayon::current_num_threads().max(1))
+                .min(grid.cells().div_ceil(GRAIN))
+                .max(1)
         } else {
             groups
         };
