@@ -163,7 +163,7 @@ impl Run {
         let ke = self.ns.kinetic_energy(rho);
         let vmax = self.ns.max_speed();
         let cfl = vmax * dt;
-        if !(cfl <= CFL_ABORT) {
+        if cfl.is_nan() || cfl > CFL_ABORT {
             return Err(ComponentError(format!(
                 "fluid-node: the flow became unstable at step {step} (advective CFL limit): \
                  max|u| dt = {vmax:.6e} * {dt} = {cfl:.6e} exceeds {CFL_ABORT}; lower \
@@ -399,8 +399,8 @@ impl Component for FluidComponent {
                                  {step}: the flow or the bead velocities blew up"
                             )));
                         }
-                        for c in 0..3 {
-                            total[c] += j.impulse[c];
+                        for (t, v) in total.iter_mut().zip(j.impulse) {
+                            *t += v;
                         }
                     }
                     exchange.publish_impulses(Port::BeadImpulses, step + 1, &run.impulses)?;

@@ -82,7 +82,7 @@ impl Axis {
                 m as i64 - n as i64
             };
             let kk = 2.0 * PI * signed as f64 / n as f64;
-            let nyquist = n % 2 == 0 && m == n / 2;
+            let nyquist = n & 1 == 0 && m == n / 2;
             k.push(if nyquist { 0.0 } else { kk });
             k2.push(kk * kk);
             keep.push(3 * signed.unsigned_abs() < n as u64);

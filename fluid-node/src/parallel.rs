@@ -31,7 +31,7 @@ pub fn for_each_row<T: Send>(
     let k = fields.len();
     assert!((1..=MAX_FIELDS).contains(&k), "for_each_row: 1..=4 fields");
     let len = fields[0].len();
-    assert!(fields.iter().all(|s| s.len() == len) && row_len > 0 && len % row_len == 0);
+    assert!(fields.iter().all(|s| s.len() == len) && len.checked_rem(row_len) == Some(0));
     let rows = len / row_len;
     let ptrs: [SharedPtr<T>; MAX_FIELDS] = std::array::from_fn(|c| {
         SharedPtr(if c < k {

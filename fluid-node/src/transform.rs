@@ -5,8 +5,8 @@
 //! `nxh = nx / 2 + 1`, in the same order: index `(kz * ny + ky) * nxh + kx`.
 //!
 //! Forward: realfft r2c along x (the contiguous last axis) row by row, then rustfft along y and
-//! (in 3D) z in place, gathering blocks of [`BLOCK`] neighbouring columns into a contiguous
-//! workspace so that the strided axes are read a cache line at a time. The forward transform is
+//! (in 3D) z in place, gathering blocks of neighbouring columns (see [`BLOCK_VALUES`]) into a
+//! contiguous workspace so that the strided axes are read in long contiguous runs. The forward transform is
 //! unnormalised; the inverse divides by the number of cells.
 //!
 //! Work is split over a fixed set of workspaces allocated with the plans; a transform
@@ -20,8 +20,18 @@ use rustfft::num_complex::Complex64;
 use rustfft::{Fft, FftPlanner};
 use std::sync::Arc;
 
-/// Number of neighbouring columns transformed together along y and z.
-pub const BLOCK: usize = 8;
+/// Complex values gathered per column block along y and z: the block holds
+/// `max(MIN_BLOCK, BLOCK_VALUES / len)` neighbouring columns of `len` values, so that a
+/// strided axis is read in runs of that many contiguous values while the block stays in
+/// the L2 cache.
+pub const BLOCK_VALUES: usize = 1024;
+/// Fewest columns per block.
+pub const MIN_BLOCK: usize = 8;
+
+/// Columns per block for lines of `len` values.
+fn block(len: usize) -> usize {
+    (BLOCK_VALUES / len.max(1)).max(MIN_BLOCK)
+}
 
 /// A raw pointer shared between rayon tasks that touch disjoint elements.
 #[derive(Clone, Copy)]
@@ -90,7 +100,7 @@ impl Transform {
             .map(|_| Workspace {
                 row: vec![0.0; grid.nx],
                 fft_scratch: vec![Complex64::default(); scratch],
-                lines: vec![Complex64::default(); BLOCK * longest],
+                lines: vec![Complex64::default(); block(longest) * longest],
             })
             .collect();
         Self {
@@ -141,15 +151,16 @@ impl Transform {
         dst: SharedPtr<Complex64>,
         c: Columns,
     ) {
-        let blocks = c.width.div_ceil(BLOCK);
+        let bw = block(c.len);
+        let blocks = c.width.div_ceil(bw);
         let items = c.outer * blocks;
         let per = items.div_ceil(workspaces.len());
         workspaces.par_iter_mut().enumerate().for_each(|(g, ws)| {
             let (src, dst) = (src, dst);
             for item in g * per..((g + 1) * per).min(items) {
                 let o = item / blocks;
-                let c0 = (item % blocks) * BLOCK;
-                let b = BLOCK.min(c.width - c0);
+                let c0 = (item % blocks) * bw;
+                let b = bw.min(c.width - c0);
                 let base = o * c.outer_stride + c0;
                 let lines = &mut ws.lines[..b * c.len];
                 for i in 0..c.len {
