@@ -114,3 +114,16 @@ fn fibre_models_swap_against_the_same_fluid_binary() {
     let after = std::fs::metadata(&fluid).unwrap().modified().unwrap();
     assert_eq!(before, after, "the fluid-node binary was rebuilt");
 }
+
+/// Drag on a fixed body in a periodic array against Sangani & Acrivos (2D cylinders, c = 0.1)
+/// and Zick & Homsy (3D spheres, c = 0.125), nominal radius, nu dt / xi^2 = 0.7: within 5 %.
+/// The dependence on nu dt / xi^2 is documented in the scenes and fluid-node/tests/drag.rs.
+#[test]
+fn periodic_array_drag_2d_and_3d() {
+    for scene in ["spm/array_drag_2d.toml", "spm/array_drag_3d.toml"] {
+        let s = run_in_process(&config(scene), &[], &format!("drag-{}", scene.replace('/', "-")));
+        let (ratio, _) = metric(&s, "drag_ratio");
+        println!("{scene}: drag / reference = {ratio:.4}");
+        assert!((ratio - 1.0).abs() < 0.05, "{scene}: drag ratio {ratio}");
+    }
+}

@@ -249,12 +249,9 @@ fn drag_ratio(ctx: &Context) -> Result<Metric, String> {
         .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
         .ok_or("metric `drag_ratio` needs fibre 0's bead_radius")?;
     let dt = ctx.scene.time.dt;
-    let force = -ctx
-        .impulses
-        .first()
-        .ok_or("metric `drag_ratio`: no impulses were published")?
-        .impulse[0]
-        / dt;
+    // The fluid drags the held body along the flow (+x): the impulse it receives, over dt.
+    let impulse = ctx.impulses.first().ok_or("metric `drag_ratio`: no impulses were published")?;
+    let force = impulse.impulse[0] / dt;
     let u = lookup(ctx.diagnostics, "mean_velocity_x")
         .ok_or("metric `drag_ratio` needs mean_velocity_x")?;
     let volume: f64 = grid.iter().product();
