@@ -121,9 +121,52 @@ fn fibre_models_swap_against_the_same_fluid_binary() {
 #[test]
 fn periodic_array_drag_2d_and_3d() {
     for scene in ["spm/array_drag_2d.toml", "spm/array_drag_3d.toml"] {
-        let s = run_in_process(&config(scene), &[], &format!("drag-{}", scene.replace('/', "-")));
+        let s = run_in_process(
+            &config(scene),
+            &[],
+            &format!("drag-{}", scene.replace('/', "-")),
+        );
         let (ratio, _) = metric(&s, "drag_ratio");
         println!("{scene}: drag / reference = {ratio:.4}");
         assert!((ratio - 1.0).abs() < 0.05, "{scene}: drag ratio {ratio}");
     }
+}
+
+/// Hard case (issue: stability): a stiff fibre, k0 / (L0 eta gamma) = 1e6, in shear with
+/// sub-cycling (the fibre node asks for at least 5 sub-steps) runs 20 000 steps: nothing turns
+/// NaN (the coordinator stops a run on any non-finite diagnostic) and the elastic energy
+/// stays bounded: its maximum over the second half is no larger than twice that over the
+/// first half.
+#[test]
+#[ignore = "fails: the flow blows up within 10 steps (max|u| dt > 1 at step 7) although the sub-cycled fibre alone is stable; the explicit SPM impulse/penalty coupling of a stiff fibre needs work (issue 3)"]
+fn stiff_fibre_in_shear_with_subcycling_stays_bounded() {
+    let mut o = small_shear("cohesive-beam");
+    // gamma = 0.56 / 56 = 0.01, k0 = pi r_b E / 2 = 1e6 eta gamma L0 -> E = 1591.5.
+    o.retain(|s| !s.starts_with("time.steps") && !s.starts_with("output.interval"));
+    o.extend([
+        "fibre.0.youngs_modulus=1591.5".into(),
+        "fibre.0.substeps=5".into(),
+        "time.steps=20000".into(),
+        "output.interval=200".into(),
+    ]);
+    let cfg = config("spm/jeffery_rigid.toml");
+    let s = run_in_process(&cfg, &o, "spm-stiff");
+    assert_eq!(s["status"], "completed", "{s}");
+    let k = s["derived"]["fluid.k0_over_l0_eta_gamma"].as_f64().unwrap();
+    assert!((k / 1e6 - 1.0).abs() < 1e-3, "k0 / (L0 eta gamma) = {k}");
+    let out = out_dir("spm-stiff");
+    let d = read_topic(&out.join("run.mcap"), "/diagnostics").unwrap();
+    let e: Vec<f64> = d
+        .iter()
+        .map(|v| v["elastic_energy"].as_f64().unwrap())
+        .collect();
+    assert!(e.iter().all(|x| x.is_finite()));
+    let half = e.len() / 2;
+    let first = e[..half].iter().cloned().fold(0.0, f64::max);
+    let second = e[half..].iter().cloned().fold(0.0, f64::max);
+    println!("max elastic energy: first half {first:.3e}, second half {second:.3e}");
+    assert!(
+        second <= 2.0 * first + 1e-12,
+        "elastic energy grows: {first:.3e} -> {second:.3e}"
+    );
 }
