@@ -41,6 +41,10 @@ fn small_shear(model: &str) -> Vec<String> {
         "output.interval=10".into(),
         "analysis.metrics=[]".into(),
         format!("fibre.0.model={model}"),
+        // With bead density equal to the fluid's, chains of small beads (r_b = 4, xi = 1) are
+        // unstable under the explicit SPM coupling after ~10-300 steps (issue 3 notes); 1.5
+        // runs stably.
+        "fibre.0.density=1.5".into(),
     ];
     if model == "bead-spring" {
         o.push("fibre.0.substeps=8".into());
@@ -138,7 +142,7 @@ fn periodic_array_drag_2d_and_3d() {
 /// stays bounded: its maximum over the second half is no larger than twice that over the
 /// first half.
 #[test]
-#[ignore = "fails: the flow blows up within 10 steps (max|u| dt > 1 at step 7) although the sub-cycled fibre alone is stable; the explicit SPM impulse/penalty coupling of a stiff fibre needs work (issue 3)"]
+#[ignore = "fails: the flow blows up within ~20 steps (max|u| dt > 1) although the sub-cycled fibre alone is stable; the explicit SPM impulse/penalty coupling of a stiff chain needs an added-mass-stable scheme (issue 3)"]
 fn stiff_fibre_in_shear_with_subcycling_stays_bounded() {
     let mut o = small_shear("cohesive-beam");
     // gamma = 0.56 / 56 = 0.01, k0 = pi r_b E / 2 = 1e6 eta gamma L0 -> E = 1591.5.
