@@ -45,6 +45,12 @@ pub struct SpectralNs {
     partials: Vec<f64>,
 }
 
+/// Up to three components as slices (empty beyond `v.len()`): pass `&mut out[..d]`.
+fn slices<T>(v: &mut [Vec<T>]) -> [&mut [T]; 3] {
+    let mut it = v.iter_mut();
+    std::array::from_fn(|_| it.next().map_or(&mut [][..], |x| &mut x[..]))
+}
+
 /// `(ky index, kz index)` of spectral row `r`.
 #[inline]
 fn row_indices(g: Grid, r: usize) -> (usize, usize) {
@@ -146,8 +152,9 @@ impl SpectralNs {
     fn project_state(&mut self) {
         let g = self.grid;
         let w = &self.waves;
-        let mut fields: Vec<&mut [Complex64]> = self.u_hat.iter_mut().map(|v| &mut v[..]).collect();
-        for_each_row(&mut fields, g.nxh(), |r, rows| {
+        let d = g.dims;
+        let mut fields = slices(&mut self.u_hat);
+        for_each_row(&mut fields[..d], g.nxh(), |r, rows| {
             let (iy, iz) = row_indices(g, r);
             for ix in 0..g.nxh() {
                 let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]];
@@ -192,12 +199,19 @@ impl SpectralNs {
                     _ => w.z.k[iz],
                 };
                 let (lo, hi) = self.nl_hat.split_at_mut(b);
-                let mut fields: Vec<&mut [Complex64]> = if a == b {
-                    vec![&mut hi[0][..]]
+                // rows[0] = N_a, rows[1] = N_b when a != b.
+                let nb: &mut [Complex64] = &mut hi[0][..];
+                let mut pair: [&mut [Complex64]; 2] = if a == b {
+                    [nb, &mut []]
                 } else {
-                    vec![&mut lo[a][..], &mut hi[0][..]]
+                    [&mut lo[a][..], nb]
                 };
-                for_each_row(&mut fields, nxh, |r, rows| {
+                let fields = if a == b {
+                    &mut pair[..1]
+                } else {
+                    &mut pair[..]
+                };
+                for_each_row(fields, nxh, |r, rows| {
                     let (iy, iz) = row_indices(g, r);
                     let p_row = &p_hat[r * nxh..(r + 1) * nxh];
                     for ix in 0..nxh {
@@ -228,8 +242,8 @@ impl SpectralNs {
         let nxh = g.nxh();
         let mean_kick: [f64; 3] =
             std::array::from_fn(|c| dt * self.body_accel[c] * g.cells() as f64);
-        let mut fields: Vec<&mut [Complex64]> = self.u_hat.iter_mut().map(|v| &mut v[..]).collect();
-        for_each_row(&mut fields, nxh, |r, rows| {
+        let mut fields = slices(&mut self.u_hat);
+        for_each_row(&mut fields[..d], nxh, |r, rows| {
             let (iy, iz) = row_indices(g, r);
             let eyz = decay[1][iy] * decay[2][iz];
             let keep_yz = w.y.keep[iy] && w.z.keep[iz];
@@ -273,8 +287,8 @@ impl SpectralNs {
         let w = &self.waves;
         let f_hat = &self.nl_hat;
         let nxh = g.nxh();
-        let mut fields: Vec<&mut [Complex64]> = self.u_hat.iter_mut().map(|v| &mut v[..]).collect();
-        for_each_row(&mut fields, nxh, |r, rows| {
+        let mut fields = slices(&mut self.u_hat);
+        for_each_row(&mut fields[..d], nxh, |r, rows| {
             let (iy, iz) = row_indices(g, r);
             for ix in 0..nxh {
                 let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]];
