@@ -176,6 +176,36 @@ fn describe_toml(v: &toml::Value) -> String {
     }
 }
 
+/// Keys of `[fluid]`, as serde reads them.
+const FLUID_KEYS: [&str; 9] = [
+    "method",
+    "grid",
+    "viscosity",
+    "density",
+    "xi",
+    "xi_cutoff",
+    "body_force",
+    "initial_velocity",
+    "binary",
+];
+/// Keys of `[walls]`.
+const WALLS_KEYS: [&str; 2] = ["velocity", "thickness"];
+
+/// Refuse a key of `table` (at `prefix`) that is not in `known`, naming it and its value.
+fn known_keys(prefix: &str, table: &toml::Value, known: &[&str]) -> Result<(), String> {
+    if let Some(t) = table.as_table() {
+        if let Some((k, v)) = t.iter().find(|(k, _)| !known.contains(&k.as_str())) {
+            let list: Vec<String> = known.iter().map(|k| format!("`{k}`")).collect();
+            return Err(format!(
+                "{prefix}.{k}: unknown key (set to {}); expected one of {}",
+                describe_toml(v),
+                list.join(", ")
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn number(v: &toml::Value) -> Option<f64> {
     match v {
         toml::Value::Float(x) => Some(*x),
@@ -233,6 +263,7 @@ pub fn parse_scene(scene_toml: &str) -> Result<FluidConfig, String> {
             Some(v @ toml::Value::Table(_)) => v.clone(),
             Some(v) => return Err(format!("fluid: expected a table, got {}", describe_toml(v))),
         };
+    known_keys("fluid", &fluid, &FLUID_KEYS)?;
     let raw: RawFluid = deserialize("fluid", fluid)?;
     if raw.binary.is_some() {
         return Err(
@@ -310,6 +341,7 @@ pub fn parse_scene(scene_toml: &str) -> Result<FluidConfig, String> {
     let walls = match table.get("walls") {
         None => None,
         Some(v @ toml::Value::Table(_)) => {
+            known_keys("walls", v, &WALLS_KEYS)?;
             let raw: RawWalls = deserialize("walls", v.clone())?;
             if raw.velocity.len() != 2 || raw.velocity.iter().any(|x| !x.is_finite()) {
                 return Err(format!(
@@ -522,7 +554,7 @@ viscosity = 0.5
     #[test]
     fn refusals_name_the_key_the_value_and_what_was_expected() {
         let cases: &[(&str, &str)] = &[
-            ("foo = 1", "fluid: unknown key `foo`"),
+            ("foo = 1", "fluid.foo: unknown key (set to 1); expected one of `method`, `grid`, `viscosity`, `density`, `xi`, `xi_cutoff`, `body_force`, `initial_velocity`, `binary`"),
             ("density = -1", "fluid.density: expected a positive number, got -1"),
             ("xi = 0", "fluid.xi: expected a positive number, got 0"),
             ("xi_cutoff = nan", "fluid.xi_cutoff: expected a positive number, got NaN"),
@@ -531,7 +563,7 @@ viscosity = 0.5
             ("initial_velocity = \"couette\"", "fluid.initial_velocity: \"couette\" needs a [walls] table"),
             ("initial_velocity = \"poiseuille\"", "fluid.initial_velocity: expected \"rest\" or \"couette\", got \"poiseuille\""),
             ("[fluid.binary]\nmobility = 1", "fluid.binary: a binary fluid needs the ternary Cahn–Hilliard model, and Cahn–Hilliard is not available yet"),
-            ("[walls]\nvelocity = [0, 1]\nspeed = 2", "walls: unknown key `speed`"),
+            ("[walls]\nvelocity = [0, 1]\nspeed = 2", "walls.speed: unknown key (set to 2); expected one of `velocity`, `thickness`"),
             ("[walls]\nvelocity = [0, 1, 2]", "walls.velocity: expected [bottom, top] (two finite numbers), got [0, 1, 2]"),
             ("[walls]\nthickness = 2", "walls.velocity: required key is missing"),
             ("[walls]\nvelocity = [0, 1]\nthickness = 9", "walls.thickness: 9 leaves a gap of 6 grid units between the walls' inner faces in a grid of ny = 24, expected at least 8"),

@@ -147,9 +147,9 @@ fn bad_scenes_are_refused_with_the_key_and_never_panic() {
         "fluid.viscosity: expected a positive number, got -1",
         "fluid.binary: a binary fluid needs the ternary Cahn–Hilliard model, and Cahn–Hilliard is not available yet",
         "fluid.grid: a 2D scene expects [nx, ny], got [48, 40, 3]",
-        "walls: unknown key `colour`",
+        "walls.colour: unknown key (set to 3); expected one of `velocity`, `thickness`",
         "time step too large for the fluid (advective CFL limit): time.dt = 30 exceeds 2.500000e1",
-        "fluid: unknown key `extra`",
+        "fluid.extra: unknown key (set to a table)",
         "the scene is not valid TOML",
         "fibre.0.bead_radius: 30 plus fluid.xi_cutoff 3 needs a grid of at least 68 nodes",
     ];
