@@ -250,7 +250,10 @@ fn drag_ratio(ctx: &Context) -> Result<Metric, String> {
         .ok_or("metric `drag_ratio` needs fibre 0's bead_radius")?;
     let dt = ctx.scene.time.dt;
     // The fluid drags the held body along the flow (+x): the impulse it receives, over dt.
-    let impulse = ctx.impulses.first().ok_or("metric `drag_ratio`: no impulses were published")?;
+    let impulse = ctx
+        .impulses
+        .first()
+        .ok_or("metric `drag_ratio`: no impulses were published")?;
     let force = impulse.impulse[0] / dt;
     let u = lookup(ctx.diagnostics, "mean_velocity_x")
         .ok_or("metric `drag_ratio` needs mean_velocity_x")?;
