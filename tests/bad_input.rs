@@ -167,10 +167,26 @@ fn unwritable_out() {
 }
 
 #[test]
-fn a_fluid_scene_is_refused_with_the_missing_effect() {
+fn a_scene_asking_for_an_effect_no_component_provides_is_refused() {
     check(
-        "fluid",
-        &format!("{GOOD}\n[fluid]\nmethod = \"spm\"\n"),
-        &["hydrodynamics"],
+        "binary-fluid",
+        &format!(
+            "{GOOD}\n[fluid]\nmethod = \"spm\"\ngrid = [16, 16]\nviscosity = 1.0\n[fluid.binary]\n"
+        ),
+        &["capillarity", "no component provides it"],
+    );
+}
+
+#[test]
+fn fluid_keys_are_checked_by_the_fluid_node() {
+    check(
+        "fluid-no-grid",
+        &format!("{GOOD}\n[fluid]\nmethod = \"spm\"\nviscosity = 1.0\n"),
+        &["fluid.grid"],
+    );
+    check(
+        "fluid-method",
+        &format!("{GOOD}\n[fluid]\nmethod = \"lbm\"\n"),
+        &["fluid.method", "lbm"],
     );
 }
