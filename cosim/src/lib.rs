@@ -8,6 +8,7 @@
 //! - [`protocol`]: control commands from the coordinator and the replies of a node;
 //! - [`component`]: the [`Component`](component::Component) trait every node implements and
 //!   the one dispatch function both transports share;
+//! - [`scene_keys`]: reading a node's scene tables with errors naming the dotted key;
 //! - [`exchange`]: the bulk-data [`Exchange`](exchange::Exchange) trait and its in-process
 //!   implementation; [`ipc`]: the iceoryx2 implementation of control and bulk data.
 pub mod component;
@@ -17,6 +18,7 @@ pub mod exchange;
 pub mod ipc;
 pub mod phase;
 pub mod protocol;
+pub mod scene_keys;
 pub mod types;
 
 pub use component::{dispatch, Component, ComponentError};

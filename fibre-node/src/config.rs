@@ -4,6 +4,7 @@
 //!
 //! Every refusal names the dotted path (`fibre.N.key`), the value and what was expected;
 //! nothing panics on any input.
+use cosim::scene_keys::{describe_value as describe_toml, deserialize_at as deserialize};
 use serde::Deserialize;
 
 /// Which fibre model a `[[fibre]]` table asks for.
@@ -176,61 +177,6 @@ fn bead_index(path: &str, index: i64, beads: usize) -> Result<usize, String> {
             "{path}: bead index {index} is out of range for a fibre of {beads} beads (expected -{beads}..={})",
             n - 1
         ))
-    }
-}
-
-/// Turn a serde error at `path` (relative to `prefix`) into a user message.
-fn serde_message(prefix: &str, path: &serde_path_to_error::Path, msg: &str) -> String {
-    let mut full = prefix.to_string();
-    for seg in path.iter() {
-        match seg {
-            serde_path_to_error::Segment::Seq { index } => full.push_str(&format!(".{index}")),
-            serde_path_to_error::Segment::Map { key } => full.push_str(&format!(".{key}")),
-            serde_path_to_error::Segment::Enum { variant } => full.push_str(&format!(".{variant}")),
-            serde_path_to_error::Segment::Unknown => {}
-        }
-    }
-    // toml appends "in `key`" lines; the first line is serde's message.
-    let msg = msg.lines().next().unwrap_or("").trim_end();
-    let quoted = msg.split('`').nth(1).unwrap_or("");
-    if msg.starts_with("unknown field ") {
-        // "unknown field `foo`, expected one of `a`, `b`": the path ends at the key itself;
-        // report the table holding it.
-        let table = full
-            .strip_suffix(&format!(".{quoted}"))
-            .unwrap_or(&full)
-            .to_string();
-        let expected = msg
-            .split_once(", expected ")
-            .map(|(_, e)| format!(" (expected {e})"))
-            .unwrap_or_default();
-        return format!("{table}: unknown key `{quoted}`{expected}");
-    }
-    if msg.starts_with("missing field ") {
-        return format!("{full}.{quoted}: required key is missing");
-    }
-    let msg = msg
-        .replace("expected f64", "expected a number")
-        .replace("expected i64", "expected an integer")
-        .replace("expected an array of length 3", "expected [x, y, z]")
-        .replace("expected a sequence", "expected an array");
-    format!("{full}: {msg}")
-}
-
-fn deserialize<T: for<'de> Deserialize<'de>>(prefix: &str, v: toml::Value) -> Result<T, String> {
-    serde_path_to_error::deserialize(v).map_err(|e| {
-        let path = e.path().clone();
-        let inner = e.into_inner();
-        serde_message(prefix, &path, &inner.to_string())
-    })
-}
-
-fn describe_toml(v: &toml::Value) -> String {
-    match v {
-        toml::Value::String(s) => format!("the string {s:?}"),
-        toml::Value::Table(_) => "a table".into(),
-        toml::Value::Array(_) => "an array".into(),
-        other => other.to_string(),
     }
 }
 

@@ -5,6 +5,7 @@
 //!
 //! Units are grid units: the grid spacing is 1, lengths are in grid spacings.
 //! Every refusal names the dotted key, the value and what was expected; nothing panics.
+use cosim::scene_keys::{describe_value as describe_toml, deserialize_at as deserialize};
 use serde::Deserialize;
 
 /// Default `fluid.density`.
@@ -122,57 +123,6 @@ fn positive(path: &str, v: f64) -> Result<f64, String> {
         Ok(v)
     } else {
         Err(format!("{path}: expected a positive number, got {v}"))
-    }
-}
-
-/// Turn a serde error at `path` (relative to `prefix`) into a user message naming the key.
-fn serde_message(prefix: &str, path: &serde_path_to_error::Path, msg: &str) -> String {
-    let mut full = prefix.to_string();
-    for seg in path.iter() {
-        match seg {
-            serde_path_to_error::Segment::Seq { index } => full.push_str(&format!(".{index}")),
-            serde_path_to_error::Segment::Map { key } => full.push_str(&format!(".{key}")),
-            serde_path_to_error::Segment::Enum { variant } => full.push_str(&format!(".{variant}")),
-            serde_path_to_error::Segment::Unknown => {}
-        }
-    }
-    let msg = msg.lines().next().unwrap_or("").trim_end();
-    let quoted = msg.split('`').nth(1).unwrap_or("");
-    if msg.starts_with("unknown field ") {
-        let table = full
-            .strip_suffix(&format!(".{quoted}"))
-            .unwrap_or(&full)
-            .to_string();
-        let expected = msg
-            .split_once(", expected ")
-            .map(|(_, e)| format!(" (expected {e})"))
-            .unwrap_or_default();
-        return format!("{table}: unknown key `{quoted}`{expected}");
-    }
-    if msg.starts_with("missing field ") {
-        return format!("{full}.{quoted}: required key is missing");
-    }
-    let msg = msg
-        .replace("expected f64", "expected a number")
-        .replace("expected i64", "expected an integer")
-        .replace("expected a sequence", "expected an array");
-    format!("{full}: {msg}")
-}
-
-fn deserialize<T: for<'de> Deserialize<'de>>(prefix: &str, v: toml::Value) -> Result<T, String> {
-    serde_path_to_error::deserialize(v).map_err(|e| {
-        let path = e.path().clone();
-        let inner = e.into_inner();
-        serde_message(prefix, &path, &inner.to_string())
-    })
-}
-
-fn describe_toml(v: &toml::Value) -> String {
-    match v {
-        toml::Value::String(s) => format!("the string {s:?}"),
-        toml::Value::Table(_) => "a table".into(),
-        toml::Value::Array(_) => "an array".into(),
-        other => other.to_string(),
     }
 }
 
