@@ -38,10 +38,12 @@
 //! [`resources_of_run`] lists what of a run is still there.
 mod client;
 mod exchange;
+mod node_main;
 mod serve;
 
 pub use client::{LinkError, NodeClient};
 pub use exchange::IpcExchange;
+pub use node_main::node_main;
 pub use serve::serve;
 
 use iceoryx2::config::Config;

@@ -64,49 +64,19 @@ impl Component for FaultAt {
     }
 }
 
-fn usage() -> ExitCode {
-    eprintln!("usage: fibre-node serve --prefix PREFIX --name NAME | fibre-node describe");
-    ExitCode::from(2)
-}
-
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    match args.first().map(String::as_str) {
-        Some("describe") => {
-            let d = FibreComponent::new().describe();
-            println!(
-                "{}",
-                serde_json::to_string_pretty(&d).expect("description serialises")
-            );
-            ExitCode::SUCCESS
-        }
-        Some("serve") => {
-            let value = |flag: &str| args.windows(2).find(|w| w[0] == flag).map(|w| w[1].clone());
-            let (Some(prefix), Some(name)) = (value("--prefix"), value("--name")) else {
-                return usage();
-            };
-            let fault = std::env::var("FIBRECOSIM_FAULT").ok().and_then(|f| {
-                let (kind, n) = f.split_once("-at-step:")?;
-                let kind = match kind {
-                    "exit" => Fault::Exit,
-                    "hang" => Fault::Hang,
-                    _ => return None,
-                };
-                Some((kind, n.parse().ok()?))
-            });
-            let mut component = FaultAt {
-                inner: FibreComponent::new(),
-                fault,
-            };
-            match cosim::ipc::serve(&mut component, &prefix, &name) {
-                Ok(()) => ExitCode::SUCCESS,
-                Err(e) => {
-                    // The coordinator may be gone and stderr a broken pipe: never panic here.
-                    let _ = writeln!(std::io::stderr(), "fibre-node: {e}");
-                    ExitCode::from(1)
-                }
-            }
-        }
-        _ => usage(),
-    }
+    let fault = std::env::var("FIBRECOSIM_FAULT").ok().and_then(|f| {
+        let (kind, n) = f.split_once("-at-step:")?;
+        let kind = match kind {
+            "exit" => Fault::Exit,
+            "hang" => Fault::Hang,
+            _ => return None,
+        };
+        Some((kind, n.parse().ok()?))
+    });
+    cosim::ipc::node_main("fibre-node", &args, || FaultAt {
+        inner: FibreComponent::new(),
+        fault,
+    })
 }
