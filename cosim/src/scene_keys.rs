@@ -61,3 +61,49 @@ pub fn describe_value(v: &toml::Value) -> String {
         other => other.to_string(),
     }
 }
+
+/// `v` if it is a finite positive number, else a message naming `path`.
+pub fn positive(path: &str, v: f64) -> Result<f64, String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{path}: expected a positive number, got {v}"))
+    }
+}
+
+/// The scene's text parsed as TOML.
+pub fn parse_table(scene_toml: &str) -> Result<toml::Table, String> {
+    scene_toml
+        .parse()
+        .map_err(|e: toml::de::Error| format!("the scene is not valid TOML: {e}"))
+}
+
+/// The top-level `dimensions` every node reads: 2 or 3, default 3.
+pub fn dimensions(table: &toml::Table) -> Result<u8, String> {
+    match table.get("dimensions") {
+        None => Ok(3),
+        Some(toml::Value::Integer(2)) => Ok(2),
+        Some(toml::Value::Integer(3)) => Ok(3),
+        Some(v) => Err(format!(
+            "dimensions: expected 2 or 3, got {}",
+            describe_value(v)
+        )),
+    }
+}
+
+/// The `time.dt` every node reads: required, positive.
+pub fn time_step(table: &toml::Table) -> Result<f64, String> {
+    match table.get("time") {
+        None => Err("time.dt: required key is missing (no [time] table)".into()),
+        Some(toml::Value::Table(t)) => match t.get("dt") {
+            None => Err("time.dt: required key is missing".into()),
+            Some(toml::Value::Float(x)) => positive("time.dt", *x),
+            Some(toml::Value::Integer(i)) => positive("time.dt", *i as f64),
+            Some(v) => Err(format!(
+                "time.dt: expected a positive number, got {}",
+                describe_value(v)
+            )),
+        },
+        Some(v) => Err(format!("time: expected a table, got {}", describe_value(v))),
+    }
+}

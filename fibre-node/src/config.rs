@@ -4,7 +4,9 @@
 //!
 //! Every refusal names the dotted path (`fibre.N.key`), the value and what was expected;
 //! nothing panics on any input.
-use cosim::scene_keys::{describe_value as describe_toml, deserialize_at as deserialize};
+use cosim::scene_keys::{
+    self, describe_value as describe_toml, deserialize_at as deserialize, positive,
+};
 use serde::Deserialize;
 
 /// Which fibre model a `[[fibre]]` table asks for.
@@ -120,14 +122,6 @@ fn fmt_vec(v: &[f64; 3]) -> String {
     format!("[{}, {}, {}]", v[0], v[1], v[2])
 }
 
-fn positive(path: &str, v: f64) -> Result<f64, String> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("{path}: expected a positive number, got {v}"))
-    }
-}
-
 fn non_negative(path: &str, v: f64) -> Result<f64, String> {
     if v.is_finite() && v >= 0.0 {
         Ok(v)
@@ -182,37 +176,9 @@ fn bead_index(path: &str, index: i64, beads: usize) -> Result<usize, String> {
 
 /// Read the fibre node's part of a scene.
 pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
-    let table: toml::Table = scene_toml
-        .parse()
-        .map_err(|e: toml::de::Error| format!("the scene is not valid TOML: {e}"))?;
-
-    let dimensions = match table.get("dimensions") {
-        None => 3,
-        Some(toml::Value::Integer(2)) => 2,
-        Some(toml::Value::Integer(3)) => 3,
-        Some(v) => {
-            return Err(format!(
-                "dimensions: expected 2 or 3, got {}",
-                describe_toml(v)
-            ))
-        }
-    };
-
-    let dt = match table.get("time") {
-        None => return Err("time.dt: required key is missing (no [time] table)".into()),
-        Some(toml::Value::Table(t)) => match t.get("dt") {
-            None => return Err("time.dt: required key is missing".into()),
-            Some(toml::Value::Float(x)) => positive("time.dt", *x)?,
-            Some(toml::Value::Integer(i)) => positive("time.dt", *i as f64)?,
-            Some(v) => {
-                return Err(format!(
-                    "time.dt: expected a positive number, got {}",
-                    describe_toml(v)
-                ))
-            }
-        },
-        Some(v) => return Err(format!("time: expected a table, got {}", describe_toml(v))),
-    };
+    let table = scene_keys::parse_table(scene_toml)?;
+    let dimensions = scene_keys::dimensions(&table)?;
+    let dt = scene_keys::time_step(&table)?;
 
     let has_fluid = table.contains_key("fluid");
 

@@ -5,7 +5,9 @@
 //!
 //! Units are grid units: the grid spacing is 1, lengths are in grid spacings.
 //! Every refusal names the dotted key, the value and what was expected; nothing panics.
-use cosim::scene_keys::{describe_value as describe_toml, deserialize_at as deserialize};
+use cosim::scene_keys::{
+    self, describe_value as describe_toml, deserialize_at as deserialize, positive,
+};
 use serde::Deserialize;
 
 /// Default `fluid.density`.
@@ -118,14 +120,6 @@ struct RawWalls {
     thickness: Option<f64>,
 }
 
-fn positive(path: &str, v: f64) -> Result<f64, String> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("{path}: expected a positive number, got {v}"))
-    }
-}
-
 /// Keys of `[fluid]`, as serde reads them.
 const FLUID_KEYS: [&str; 9] = [
     "method",
@@ -171,38 +165,9 @@ fn fmt_list<T: std::fmt::Display>(v: &[T]) -> String {
 
 /// Read the fluid node's part of a scene.
 pub fn parse_scene(scene_toml: &str) -> Result<FluidConfig, String> {
-    let table: toml::Table = scene_toml
-        .parse()
-        .map_err(|e: toml::de::Error| format!("the scene is not valid TOML: {e}"))?;
-
-    let dimensions = match table.get("dimensions") {
-        None => 3,
-        Some(toml::Value::Integer(2)) => 2,
-        Some(toml::Value::Integer(3)) => 3,
-        Some(v) => {
-            return Err(format!(
-                "dimensions: expected 2 or 3, got {}",
-                describe_toml(v)
-            ))
-        }
-    };
-
-    let dt = match table.get("time") {
-        None => return Err("time.dt: required key is missing (no [time] table)".into()),
-        Some(toml::Value::Table(t)) => match t.get("dt") {
-            None => return Err("time.dt: required key is missing".into()),
-            Some(v) => match number(v) {
-                Some(x) => positive("time.dt", x)?,
-                None => {
-                    return Err(format!(
-                        "time.dt: expected a positive number, got {}",
-                        describe_toml(v)
-                    ))
-                }
-            },
-        },
-        Some(v) => return Err(format!("time: expected a table, got {}", describe_toml(v))),
-    };
+    let table = scene_keys::parse_table(scene_toml)?;
+    let dimensions = scene_keys::dimensions(&table)? as usize;
+    let dt = scene_keys::time_step(&table)?;
 
     let fluid =
         match table.get("fluid") {
