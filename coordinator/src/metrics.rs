@@ -34,7 +34,8 @@ pub struct Context<'a> {
     pub trajectory: &'a crate::trajectory::Trajectory,
 }
 
-fn lookup(list: &[(String, f64)], key: &str) -> Option<f64> {
+/// The value named `key` in a list of named values (diagnostics, derived quantities).
+pub fn lookup(list: &[(String, f64)], key: &str) -> Option<f64> {
     list.iter().find(|(k, _)| k == key).map(|(_, v)| *v)
 }
 

@@ -296,10 +296,6 @@ fn largest_load(scene: &LoadedScene) -> f64 {
     m
 }
 
-fn diag(report: &[(String, f64)], name: &str) -> Option<f64> {
-    report.iter().find(|(k, _)| k == name).map(|(_, v)| *v)
-}
-
 /// Run a scene to the end, writing `out/run.mcap` and `out/summary.json`.
 pub fn run(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError> {
     INTERRUPTED.store(false, Ordering::SeqCst);
@@ -606,9 +602,9 @@ fn drive(
 /// neither a turning point nor a pass through equilibrium is mistaken for rest).
 fn is_at_rest(report: &[(String, f64)], tol: f64, load_scale: f64) -> bool {
     let (Some(force), Some(kinetic), Some(elastic)) = (
-        diag(report, "max_net_force"),
-        diag(report, "kinetic_energy"),
-        diag(report, "elastic_energy"),
+        crate::metrics::lookup(report, "max_net_force"),
+        crate::metrics::lookup(report, "kinetic_energy"),
+        crate::metrics::lookup(report, "elastic_energy"),
     ) else {
         return false;
     };
