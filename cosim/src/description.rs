@@ -44,6 +44,21 @@ pub struct ParameterDescription {
     pub description: String,
 }
 
+/// A parameter description from its parts (`default: None` when the key is required).
+pub fn parameter(
+    key: &str,
+    unit: &str,
+    default: Option<&str>,
+    description: &str,
+) -> ParameterDescription {
+    ParameterDescription {
+        key: key.into(),
+        unit: unit.into(),
+        default: default.map(Into::into),
+        description: description.into(),
+    }
+}
+
 /// One input or output port.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PortDescription {

@@ -3,7 +3,7 @@ use crate::config::{parse_scene, SceneConfig, MAX_SUBSTEPS};
 use crate::fibre::{Fibre, Model};
 use crate::quaternion::{from_array, to_array, Vec3};
 use crate::stability::{stability_limit, SAFETY};
-use cosim::description::{ModelDescription, ParameterDescription, PortDescription};
+use cosim::description::{parameter as param, ModelDescription, PortDescription};
 use cosim::{
     effects, BeadImpulse, BeadState, Component, ComponentError, Configured, Exchange, Phase,
     PhaseReport, Port,
@@ -52,15 +52,6 @@ struct SavedState {
     /// Per bead: position (3), orientation (4), velocity (3), angular velocity (3), as the
     /// bit patterns of the f64 values.
     data: Vec<u64>,
-}
-
-fn param(key: &str, unit: &str, default: Option<&str>, description: &str) -> ParameterDescription {
-    ParameterDescription {
-        key: key.into(),
-        unit: unit.into(),
-        default: default.map(Into::into),
-        description: description.into(),
-    }
 }
 
 impl FibreComponent {

@@ -14,7 +14,7 @@ use crate::spectral_ns::SpectralNs;
 use crate::spm::Spm;
 use crate::stability::{self, CFL_ABORT};
 use crate::walls::Walls;
-use cosim::description::{ModelDescription, ParameterDescription, PortDescription};
+use cosim::description::{parameter as param, ModelDescription, PortDescription};
 use cosim::{
     effects, BeadImpulse, BeadState, Component, ComponentError, Configured, Exchange, Phase,
     PhaseReport, Port,
@@ -75,15 +75,6 @@ struct StateHeader {
     dimensions: usize,
     grid: [usize; 3],
     pending: Option<u64>,
-}
-
-fn param(key: &str, unit: &str, default: Option<&str>, description: &str) -> ParameterDescription {
-    ParameterDescription {
-        key: key.into(),
-        unit: unit.into(),
-        default: default.map(Into::into),
-        description: description.into(),
-    }
 }
 
 impl FluidComponent {
