@@ -1,6 +1,6 @@
 //! The fibre node as a co-simulation component ([`cosim::Component`]).
 use crate::config::{parse_scene, SceneConfig, MAX_SUBSTEPS};
-use crate::fibre::{Fibre, Model};
+use crate::fibre::{BeadKinematics, Fibre, Model};
 use crate::quaternion::{from_array, to_array, Vec3};
 use crate::stability::{stability_limit, SAFETY};
 use cosim::description::{parameter as param, ModelDescription, PortDescription};
@@ -22,7 +22,19 @@ pub const DIAGNOSTICS: [&str; 7] = [
 ];
 
 /// Tag of the saved-state format.
-const STATE_FORMAT: &str = "fibre-node-state/1";
+const STATE_FORMAT: &str = "fibre-node-state/2";
+
+/// f64 values saved per bead (see [`SavedState::data`]).
+const SAVED_PER_BEAD: usize = 32;
+
+/// Position, orientation, velocity and angular velocity as 13 numbers.
+fn kinematics_values(b: &BeadKinematics) -> [f64; 13] {
+    let q = to_array(&b.quat);
+    [
+        b.pos.x, b.pos.y, b.pos.z, q[0], q[1], q[2], q[3], b.vel.x, b.vel.y, b.vel.z, b.omega.x,
+        b.omega.y, b.omega.z,
+    ]
+}
 
 /// The fibre node: cohesive-beam (L2020) and bead-spring (S2023) fibres, SPM phases.
 #[derive(Default)]
@@ -49,7 +61,9 @@ struct SavedState {
     format: String,
     beads_per_fibre: Vec<usize>,
     pending: Option<u64>,
-    /// Per bead: position (3), orientation (4), velocity (3), angular velocity (3), as the
+    /// Per bead: position (3), orientation (4), velocity (3), angular velocity (3), the
+    /// previous step's hydrodynamic impulse (3) and angular impulse (3), and the same 13
+    /// kinematic values at the start of the step (the corrector's, see `fibre.rs`), as the
     /// bit patterns of the f64 values.
     data: Vec<u64>,
 }
@@ -379,26 +393,22 @@ impl Component for FibreComponent {
             .run
             .as_ref()
             .ok_or_else(|| ComponentError::new("fibre-node: nothing to save before configure"))?;
-        let mut data = Vec::with_capacity(13 * run.total_beads);
+        let mut data = Vec::with_capacity(SAVED_PER_BEAD * run.total_beads);
         for f in &run.fibres {
             for k in 0..f.len() {
-                let q = to_array(&f.quat[k]);
-                let vals = [
-                    f.pos[k].x,
-                    f.pos[k].y,
-                    f.pos[k].z,
-                    q[0],
-                    q[1],
-                    q[2],
-                    q[3],
-                    f.vel[k].x,
-                    f.vel[k].y,
-                    f.vel[k].z,
-                    f.omega[k].x,
-                    f.omega[k].y,
-                    f.omega[k].z,
-                ];
-                data.extend(vals.iter().map(|v| v.to_bits()));
+                let now = BeadKinematics {
+                    pos: f.pos[k],
+                    quat: f.quat[k],
+                    vel: f.vel[k],
+                    omega: f.omega[k],
+                };
+                let start = f.start.get(k).copied().unwrap_or(now);
+                let (j, l) = (f.predicted_impulse[k], f.predicted_angular_impulse[k]);
+                let vals = kinematics_values(&now)
+                    .into_iter()
+                    .chain([j.x, j.y, j.z, l.x, l.y, l.z])
+                    .chain(kinematics_values(&start));
+                data.extend(vals.map(|v| v.to_bits()));
             }
         }
         let saved = SavedState {
@@ -426,7 +436,7 @@ impl Component for FibreComponent {
             )));
         }
         let have: Vec<usize> = run.fibres.iter().map(|f| f.len()).collect();
-        if saved.beads_per_fibre != have || saved.data.len() != 13 * run.total_beads {
+        if saved.beads_per_fibre != have || saved.data.len() != SAVED_PER_BEAD * run.total_beads {
             return Err(ComponentError(format!(
                 "fibre-node: saved state has beads per fibre {:?}, the configured scene has {have:?}",
                 saved.beads_per_fibre
@@ -434,12 +444,27 @@ impl Component for FibreComponent {
         }
         let mut it = saved.data.iter().map(|b| f64::from_bits(*b));
         let mut next = || it.next().unwrap_or(0.0);
+        let kinematics = |next: &mut dyn FnMut() -> f64| BeadKinematics {
+            pos: Vec3::new(next(), next(), next()),
+            quat: from_array([next(), next(), next(), next()]),
+            vel: Vec3::new(next(), next(), next()),
+            omega: Vec3::new(next(), next(), next()),
+        };
         for f in run.fibres.iter_mut() {
+            let mid_step = saved.pending.is_some() && f.hydrodynamic && f.substeps > 1;
+            f.start.clear();
             for k in 0..f.len() {
-                f.pos[k] = Vec3::new(next(), next(), next());
-                f.quat[k] = from_array([next(), next(), next(), next()]);
-                f.vel[k] = Vec3::new(next(), next(), next());
-                f.omega[k] = Vec3::new(next(), next(), next());
+                let now = kinematics(&mut next);
+                f.pos[k] = now.pos;
+                f.quat[k] = now.quat;
+                f.vel[k] = now.vel;
+                f.omega[k] = now.omega;
+                f.predicted_impulse[k] = Vec3::new(next(), next(), next());
+                f.predicted_angular_impulse[k] = Vec3::new(next(), next(), next());
+                let start = kinematics(&mut next);
+                if mid_step {
+                    f.start.push(start);
+                }
             }
             f.compute_forces();
         }
@@ -743,6 +768,61 @@ mod tests {
         let e = d.restore_state(&saved).unwrap_err();
         assert!(e.0.contains("beads per fibre"), "{e}");
         assert!(d.restore_state(b"not json").is_err());
+    }
+
+    /// With a fluid and sub-steps the step is a predictor and a corrector (`fibre.rs`): a
+    /// state saved between them, or at a step boundary, carries the start state and the
+    /// predicted impulses, and the restored run continues bit for bit.
+    #[test]
+    fn save_restore_with_fluid_impulses_is_bit_identical() {
+        let scene = "dimensions = 2\n[time]\ndt = 0.1\n[fluid]\nmethod = \"spm\"\n[[fibre]]\n\
+                     model = \"cohesive-beam\"\nbeads = 5\nbead_radius = 1\nyoungs_modulus = 1\n\
+                     substeps = 3\n";
+        let impulses = |n: u64| -> Vec<BeadImpulse> {
+            (0..5u64)
+                .map(|k| BeadImpulse {
+                    impulse: [
+                        1e-3 * ((n + k) as f64).sin(),
+                        1e-3 * ((n * k) as f64).cos(),
+                        0.0,
+                    ],
+                    angular_impulse: [0.0, 0.0, 1e-4 * (k as f64 - 2.0) * (n as f64).cos()],
+                })
+                .collect()
+        };
+        let velocities = |c: &mut FibreComponent, x: &mut InProcessExchange, n: u64| {
+            x.publish_impulses(Port::BeadImpulses, n + 1, &impulses(n))
+                .unwrap();
+            c.run_phase(n, Phase::FibreVelocities, x).unwrap();
+        };
+        let (mut a, mut xa, _) = configure(scene);
+        let (mut saved, mut saved_mid) = (Vec::new(), Vec::new());
+        for n in 0..100 {
+            if n == 40 {
+                saved = a.save_state().unwrap();
+            }
+            a.run_phase(n, Phase::FibrePositions, &mut xa).unwrap();
+            if n == 60 {
+                saved_mid = a.save_state().unwrap();
+            }
+            velocities(&mut a, &mut xa, n);
+        }
+        let end = bits(&a.bead_states());
+        let (mut b, mut xb, _) = configure(scene);
+        b.restore_state(&saved).unwrap();
+        for n in 40..100 {
+            b.run_phase(n, Phase::FibrePositions, &mut xb).unwrap();
+            velocities(&mut b, &mut xb, n);
+        }
+        assert_eq!(bits(&b.bead_states()), end);
+        let (mut c, mut xc, _) = configure(scene);
+        c.restore_state(&saved_mid).unwrap();
+        velocities(&mut c, &mut xc, 60);
+        for n in 61..100 {
+            c.run_phase(n, Phase::FibrePositions, &mut xc).unwrap();
+            velocities(&mut c, &mut xc, n);
+        }
+        assert_eq!(bits(&c.bead_states()), end);
     }
 
     #[test]
