@@ -34,6 +34,9 @@ fn small_shear(model: &str) -> Vec<String> {
     let mut o = vec![
         "fluid.grid=[64,64]".to_string(),
         "walls.velocity=[-0.28,0.28]".into(),
+        // gamma = 0.01; k0 / (L0 eta gamma) = 75e3 as in the scene.
+        "fibre.0.youngs_modulus=79.58".into(),
+        "time.dt=0.25".into(),
         "fibre.0.beads=4".into(),
         "fibre.0.bead_radius=4.0".into(),
         "fibre.0.start=[32.0,20.0,0.0]".into(),

@@ -197,7 +197,12 @@ pub fn compute(
                 let mut m = Metric::with_reference(
                     gamma * period,
                     crate::reference::jeffery::chain_period_gamma(n),
-                    "Jeffery, equivalent ellipse e_c = 1.14 e_p^0.844 (L2020 appendix B)",
+                    "Jeffery, gamma T = 2 pi (e + 1/e) with the equivalent ellipse e = 1.14 \
+                     N_b^0.844 of Harris & Pittman (L2020 appendix B)",
+                );
+                m.extra.insert(
+                    "reference_md_table".into(),
+                    crate::reference::jeffery::chain_period_gamma_table(n),
                 );
                 m.extra.insert(
                     "passes_through_vertical".into(),
