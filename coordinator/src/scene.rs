@@ -7,9 +7,9 @@
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
-/// The scene the coordinator runs when no file is given: a 2D cantilever under a tip load
-/// large enough to bend it well past small-deflection theory (alpha = 2).
-pub const BUILT_IN_EXAMPLE: &str = include_str!("../../configs/cantilever.toml");
+/// The scene the coordinator runs when no file is given: a fairly rigid fibre tumbling in
+/// SPM Couette flow, fibre and fluid coupled (`configs/spm/tumbling.toml`).
+pub const BUILT_IN_EXAMPLE: &str = include_str!("../../configs/spm/tumbling.toml");
 
 /// A user-facing error: one sentence that names the key or path and what was expected.
 #[derive(Debug, thiserror::Error)]
@@ -331,6 +331,7 @@ mod tests {
         let s = load(None, &[]).unwrap();
         assert_eq!(s.scene.dimensions, 2);
         assert!(!s.scene.fibre.is_empty());
+        assert!(s.scene.fluid.is_some() && s.scene.walls.is_some());
     }
 
     #[test]
