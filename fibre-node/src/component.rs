@@ -212,8 +212,12 @@ impl Component for FibreComponent {
             notes: vec![
                 "sub-cycling: with fibre.N.substeps = n the fibre takes n internal steps of \
                  dt / n per fluid step (n position updates in fibre-positions with n - 1 \
-                 internal velocity kicks in between; the last kick, with the fluid impulses, \
-                 in fibre-velocities)"
+                 internal velocity kicks in between, the last kick in fibre-velocities). \
+                 With a fluid the step is a predictor-corrector: fibre-positions predicts the \
+                 positions with the previous step's impulses spread over the sub-steps; \
+                 fibre-velocities takes the step again from its start with the step's own \
+                 impulses spread over the sub-steps and publishes the corrected positions \
+                 and velocities"
                     .into(),
                 "configure refuses a time step above the beam-stiffness limit \
                  (symplectic Euler, h omega_max < 2) and says how to fix it"
