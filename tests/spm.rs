@@ -143,25 +143,32 @@ fn periodic_array_drag_2d_and_3d() {
 /// sub-cycling (the fibre node asks for at least 5 sub-steps) runs 20 000 steps: nothing turns
 /// NaN (the coordinator stops a run on any non-finite diagnostic) and the elastic energy
 /// stays bounded: its maximum over the second half is no larger than twice that over the
-/// first half.
+/// first half. The fibre's bonds carry Kelvin-Voigt damping, tau = 0.005 (a tenth of a
+/// sub-step; the fastest bending mode loses ~0.3 of its amplitude per fluid step, the
+/// tumbling is not damped); without it see the ignored test below.
 #[test]
-#[ignore = "fails: an antisymmetric bending mode grows from step ~100 and the flow blows up at step ~245 (max|u| dt > 1), with 5, 10 or 20 sub-steps alike, although the sub-cycled fibre alone is stable: the once-per-step impulse samples the stiff chain's fast vibration; needs the fluid's drag inside the sub-steps or an implicit exchange (issue 3)"]
 fn stiff_fibre_in_shear_with_subcycling_stays_bounded() {
+    stiff_fibre_run(0.005);
+}
+
+fn stiff_fibre_run(internal_damping: f64) {
     let mut o = small_shear("cohesive-beam");
     // gamma = 0.56 / 56 = 0.01, k0 = pi r_b E / 2 = 1e6 eta gamma L0 -> E = 1591.5.
     o.retain(|s| !s.starts_with("time.steps") && !s.starts_with("output.interval"));
     o.extend([
         "fibre.0.youngs_modulus=1591.5".into(),
         "fibre.0.substeps=5".into(),
+        format!("fibre.0.internal_damping={internal_damping}"),
         "time.steps=20000".into(),
         "output.interval=200".into(),
     ]);
     let cfg = config("spm/jeffery_rigid.toml");
-    let s = run_in_process(&cfg, &o, "spm-stiff");
+    let name = format!("spm-stiff-{}", (internal_damping * 1e3).round() as u32);
+    let out = out_dir(&name);
+    let s = run_in_process(&cfg, &o, &name);
     assert_eq!(s["status"], "completed", "{s}");
     let k = s["derived"]["fluid.k0_over_l0_eta_gamma"].as_f64().unwrap();
     assert!((k / 1e6 - 1.0).abs() < 1e-3, "k0 / (L0 eta gamma) = {k}");
-    let out = out_dir("spm-stiff");
     let d = read_topic(&out.join("run.mcap"), "/diagnostics").unwrap();
     let e: Vec<f64> = d
         .iter()
@@ -176,4 +183,12 @@ fn stiff_fibre_in_shear_with_subcycling_stays_bounded() {
         second <= 2.0 * first + 1e-12,
         "elastic energy grows: {first:.3e} -> {second:.3e}"
     );
+}
+
+/// The same without internal damping: the once-per-step impulse samples the stiff chain's
+/// fast bending vibration (omega dt ~ 2.5) and feeds it.
+#[test]
+#[ignore = "fails: without internal damping an antisymmetric bending mode grows from step ~100 and the flow blows up at step ~245 (max|u| dt > 1), with 5, 10 or 20 sub-steps alike; the rigid body (fluid-node example rigid_rod_shear) is stable (issue 3)"]
+fn stiff_fibre_in_shear_without_internal_damping_stays_bounded() {
+    stiff_fibre_run(0.0);
 }

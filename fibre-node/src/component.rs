@@ -188,6 +188,7 @@ impl Component for FibreComponent {
                 param("fibre.N.loads.M.force", "mass length / time^2", Some("[0.0, 0.0, 0.0]"), "force, laboratory frame"),
                 param("fibre.N.loads.M.torque", "mass length^2 / time^2", Some("[0.0, 0.0, 0.0]"), "torque, laboratory frame (cohesive beam only)"),
                 param("fibre.N.damping", "1 / time", Some("0.0"), "damping rate c: F = -c m V, T = -c I Omega"),
+                param("fibre.N.internal_damping", "time", Some("0.0"), "Kelvin-Voigt damping time tau of the bonds: internal loads tau dF/dt (a mode of frequency omega decays at tau omega^2 / 2; rigid motion is not damped)"),
                 param("fibre.N.substeps", "1", Some("1"), "internal fibre steps per time.dt"),
                 param("fibre.N.stretch_stiffness", "mass length^2 / time^2", Some("E pi r^2 l0"), "bead-spring k_s (spring stiffness k_s / l0^2)"),
                 param("fibre.N.bending_stiffness", "mass length^2 / time^2", Some("E I / l0"), "bead-spring k_b (U_b = -k_b sum t_i+1 . t_i)"),

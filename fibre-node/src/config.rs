@@ -54,6 +54,8 @@ pub struct FibreConfig {
     pub clamp: Vec<usize>,
     pub loads: Vec<LoadConfig>,
     pub damping: f64,
+    /// Kelvin-Voigt (stiffness-proportional) damping time of the bonds, >= 0.
+    pub internal_damping: f64,
     pub substeps: usize,
     pub stretch_stiffness: Option<f64>,
     pub bending_stiffness: Option<f64>,
@@ -102,6 +104,7 @@ struct RawFibre {
     #[serde(default)]
     loads: Vec<RawLoad>,
     damping: Option<f64>,
+    internal_damping: Option<f64>,
     substeps: Option<i64>,
     stretch_stiffness: Option<f64>,
     bending_stiffness: Option<f64>,
@@ -306,6 +309,10 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         Some(c) => non_negative(&format!("{p}.damping"), c)?,
         None => 0.0,
     };
+    let internal_damping = match raw.internal_damping {
+        Some(c) => non_negative(&format!("{p}.internal_damping"), c)?,
+        None => 0.0,
+    };
     let substeps = match raw.substeps {
         None => 1,
         Some(s) if (1..=MAX_SUBSTEPS).contains(&s) => s as usize,
@@ -365,6 +372,7 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         clamp,
         loads,
         damping,
+        internal_damping,
         substeps,
         stretch_stiffness,
         bending_stiffness,
