@@ -309,13 +309,9 @@ impl Fibre {
     /// `-tau v^T K v <= 0`, and rigid translation and rotation of an unstressed fibre are not
     /// damped.
     fn add_internal_damping(&mut self) {
+        let (tau, l0) = (self.internal_damping, self.rest_length());
         let Some(p) = self.probe.as_mut() else {
             return;
-        };
-        let tau = self.internal_damping;
-        let l0 = match &self.model {
-            Model::CohesiveBeam(b) => b.rest_length,
-            Model::BeadSpring(b) => b.rest_length,
         };
         let speed = self
             .vel
