@@ -9,14 +9,7 @@ use std::time::{Duration, Instant};
 fn sigint_ends_the_run_cleanly() {
     let out = out_dir("interrupt");
     let cfg = config("cantilever.toml");
-    let child = std::process::Command::new(bin_dir().join("coordinator"))
-        .args([
-            "run",
-            cfg.to_str().unwrap(),
-            "--quiet",
-            "--out",
-            out.to_str().unwrap(),
-        ])
+    let child = run_command(&cfg, &out)
         .args([
             "--set",
             "time.steps=100000000",

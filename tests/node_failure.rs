@@ -8,14 +8,7 @@ use coordinator::mcap_log::read_topic;
 fn a_dying_fibre_node_is_reported_and_the_log_stays_readable() {
     let out = out_dir("node-failure");
     let cfg = config("cantilever.toml");
-    let o = std::process::Command::new(bin_dir().join("coordinator"))
-        .args([
-            "run",
-            cfg.to_str().unwrap(),
-            "--quiet",
-            "--out",
-            out.to_str().unwrap(),
-        ])
+    let o = run_command(&cfg, &out)
         .args(["--set", "time.steps=100", "--set", "output.interval=10"])
         .env("FIBRECOSIM_FAULT", "exit-at-step:25")
         .output()
@@ -49,17 +42,8 @@ fn an_unresponsive_fibre_node_ends_the_run_after_the_timeout() {
     let out = out_dir("node-hang");
     let cfg = config("cantilever.toml");
     let t0 = std::time::Instant::now();
-    let o = std::process::Command::new(bin_dir().join("coordinator"))
-        .args([
-            "run",
-            cfg.to_str().unwrap(),
-            "--quiet",
-            "--node-timeout",
-            "1",
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .args(["--set", "time.steps=100"])
+    let o = run_command(&cfg, &out)
+        .args(["--node-timeout", "1", "--set", "time.steps=100"])
         .env("FIBRECOSIM_FAULT", "hang-at-step:7")
         .output()
         .unwrap();

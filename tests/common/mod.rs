@@ -76,3 +76,15 @@ pub fn coordinator(args: &[&str]) -> Output {
         .output()
         .expect("start coordinator")
 }
+
+/// `coordinator run CFG --quiet --out OUT` as a command to add to (overrides, environment)
+/// and start.
+pub fn run_command(cfg: &Path, out: &Path) -> Command {
+    let mut c = Command::new(bin_dir().join("coordinator"));
+    c.arg("run")
+        .arg(cfg)
+        .args(["--quiet", "--out"])
+        .arg(out)
+        .current_dir(root());
+    c
+}
