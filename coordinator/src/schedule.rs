@@ -10,7 +10,7 @@ pub struct Plan {
     pub requested: Vec<String>,
     /// Phases of one step, in order.
     pub schedule: Vec<Phase>,
-    /// Coupling scheme: `"none"` without a fluid, else the fluid method's (`"spm"`).
+    /// Coupling scheme: `"none"` without a fluid, else the fluid method's (`"spm"`, `"fpd"`).
     pub coupling: String,
     /// Node kinds to launch, in start order: `"fibre"`, `"fluid"`.
     pub nodes: Vec<&'static str>,
@@ -45,9 +45,12 @@ pub fn plan(scene: &LoadedScene) -> Result<Plan, String> {
         }
         None => return Err("key `fluid.method`: missing (expected \"spm\")".into()),
     };
+    if method == "fpd-lbm" {
+        return fpd_plan(s, has_fibres);
+    }
     if method != "spm" {
         return Err(format!(
-            "key `fluid.method`: `{method}` is not available in this build (available: spm)"
+            "key `fluid.method`: `{method}` is not a fluid method (available: spm, fpd-lbm)"
         ));
     }
     let binary = fluid.contains_key("binary");
@@ -83,4 +86,110 @@ pub fn plan(scene: &LoadedScene) -> Result<Plan, String> {
         coupling: "spm".into(),
         nodes,
     })
+}
+
+/// FPD on MRT-LBM (S2023 section II C; DESIGN.md): the fibre's forces, one lattice step, the
+/// fibre's positions moved with the bead velocities of the new flow.
+fn fpd_plan(s: &crate::scene::Scene, has_fibres: bool) -> Result<Plan, String> {
+    if s.fluid.as_ref().is_some_and(|f| f.contains_key("binary")) {
+        return Err(
+            "[fluid.binary] needs fluid.method = \"spm\": the capillary model (L2020) is not \
+             part of the FPD method"
+                .into(),
+        );
+    }
+    let mut requested = vec![effects::HYDRODYNAMICS.to_string()];
+    if s.walls.is_some() {
+        requested.push(effects::WALLS.to_string());
+    }
+    let mut schedule = Vec::new();
+    let mut nodes = Vec::new();
+    if has_fibres {
+        schedule.push(Phase::FibreForces);
+        nodes.push("fibre");
+    }
+    schedule.push(Phase::FluidLatticeStep);
+    if has_fibres {
+        schedule.push(Phase::FibreAdvance);
+    }
+    nodes.push("fluid");
+    Ok(Plan {
+        requested,
+        schedule,
+        coupling: "fpd".into(),
+        nodes,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plan_of(text: &str) -> Result<Plan, String> {
+        let (scene, toml) = crate::scene::from_text(text, "test scene", &[]).unwrap();
+        plan(&LoadedScene {
+            scene,
+            toml,
+            path: None,
+        })
+    }
+
+    const FIBRE: &str = "[[fibre]]\nmodel = \"bead-spring\"\nbeads = 3\nbead_radius = 1.0\n\
+                         youngs_modulus = 1.0\n";
+
+    #[test]
+    fn spm_runs_the_five_phases_and_skips_what_the_scene_lacks() {
+        let p = plan_of(&format!(
+            "[time]\ndt = 1.0\nsteps = 1\n[fluid]\nmethod = \"spm\"\n{FIBRE}"
+        ))
+        .unwrap();
+        assert_eq!(p.coupling, "spm");
+        assert_eq!(
+            p.schedule,
+            vec![
+                Phase::FibrePositions,
+                Phase::FluidMomentumExchange,
+                Phase::FibreVelocities,
+                Phase::FluidPenalty
+            ]
+        );
+        assert_eq!(p.nodes, vec!["fibre", "fluid"]);
+    }
+
+    #[test]
+    fn fpd_runs_forces_lattice_step_advance() {
+        let text = format!(
+            "[time]\ndt = 1.0\nsteps = 1\n[fluid]\nmethod = \"fpd-lbm\"\n[walls]\nvelocity = [-0.01, 0.01]\n{FIBRE}"
+        );
+        let p = plan_of(&text).unwrap();
+        assert_eq!(p.coupling, "fpd");
+        assert_eq!(
+            p.schedule,
+            vec![
+                Phase::FibreForces,
+                Phase::FluidLatticeStep,
+                Phase::FibreAdvance
+            ]
+        );
+        assert_eq!(p.requested, vec![effects::HYDRODYNAMICS, effects::WALLS]);
+        // Without fibres only the lattice steps.
+        let p = plan_of("[time]\ndt = 1.0\nsteps = 1\n[fluid]\nmethod = \"fpd-lbm\"\n").unwrap();
+        assert_eq!(p.schedule, vec![Phase::FluidLatticeStep]);
+        assert_eq!(p.nodes, vec!["fluid"]);
+    }
+
+    #[test]
+    fn unknown_methods_and_capillarity_under_fpd_are_refused() {
+        let e = plan_of("[time]\ndt = 1.0\nsteps = 1\n[fluid]\nmethod = \"lbm\"\n").unwrap_err();
+        assert!(
+            e.contains("`lbm` is not a fluid method (available: spm, fpd-lbm)"),
+            "{e}"
+        );
+        let e = plan_of("[time]\ndt = 1.0\nsteps = 1\n[fluid]\nmethod = \"fpd-lbm\"\n[fluid.binary]\n")
+            .unwrap_err();
+        assert!(
+            e.contains("[fluid.binary] needs fluid.method = \"spm\""),
+            "{e}"
+        );
+    }
 }

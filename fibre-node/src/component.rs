@@ -1,12 +1,12 @@
 //! The fibre node as a co-simulation component ([`cosim::Component`]).
-use crate::config::{parse_scene, SceneConfig, MAX_SUBSTEPS};
+use crate::config::{parse_scene, Coupling, ModelKind, SceneConfig, MAX_SUBSTEPS};
 use crate::fibre::{BeadKinematics, Fibre, Model};
 use crate::quaternion::{from_array, to_array, Vec3};
 use crate::stability::{stability_limit, SAFETY};
 use cosim::description::{parameter as param, ModelDescription, PortDescription};
 use cosim::{
-    effects, BeadImpulse, BeadState, Component, ComponentError, Configured, Exchange, Phase,
-    PhaseReport, Port,
+    effects, BeadForce, BeadImpulse, BeadState, Component, ComponentError, Configured, Exchange,
+    Phase, PhaseReport, Port,
 };
 use serde::{Deserialize, Serialize};
 
@@ -36,7 +36,8 @@ fn kinematics_values(b: &BeadKinematics) -> [f64; 13] {
     ]
 }
 
-/// The fibre node: cohesive-beam (L2020) and bead-spring (S2023) fibres, SPM phases.
+/// The fibre node: cohesive-beam (L2020) and bead-spring (S2023) fibres; SPM phases, and FPD
+/// phases for bead-spring fibres.
 #[derive(Default)]
 pub struct FibreComponent {
     run: Option<Run>,
@@ -46,7 +47,10 @@ struct Run {
     scene: SceneConfig,
     fibres: Vec<Fibre>,
     total_beads: usize,
-    /// Read hydrodynamic impulses in `FibreVelocities` (the scene has a `[fluid]` table).
+    /// How the fluid, if any, moves the fibres: SPM impulses are read in
+    /// `FibreVelocities`; FPD runs `FibreForces` and `FibreAdvance` instead.
+    coupling: Coupling,
+    /// Read hydrodynamic impulses in `FibreVelocities` (SPM coupling).
     use_impulses: bool,
     /// The fibres' force buffers hold F(X) at the current positions.
     forces_current: bool,
@@ -54,6 +58,10 @@ struct Run {
     pending: Option<u64>,
     states: Vec<BeadState>,
     impulses: Vec<BeadImpulse>,
+    /// FPD: the bead forces published in `FibreForces`.
+    forces: Vec<BeadForce>,
+    /// FPD: the bead velocities read in `FibreAdvance`.
+    velocities: Vec<BeadState>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -160,7 +168,7 @@ impl Component for FibreComponent {
                 .into(),
             kind: "fibre".into(),
             models: vec!["cohesive-beam".into(), "bead-spring".into()],
-            coupling_schemes: vec!["none".into(), "spm".into()],
+            coupling_schemes: vec!["none".into(), "spm".into(), "fpd".into()],
             effects: vec![
                 effects::BEAM_ELASTICITY.into(),
                 effects::TWIST.into(),
@@ -169,7 +177,12 @@ impl Component for FibreComponent {
                 effects::CLAMP.into(),
                 effects::DAMPING.into(),
             ],
-            phases: vec![Phase::FibrePositions, Phase::FibreVelocities],
+            phases: vec![
+                Phase::FibrePositions,
+                Phase::FibreVelocities,
+                Phase::FibreForces,
+                Phase::FibreAdvance,
+            ],
             parameters: vec![
                 param("dimensions", "1", Some("3"), "2 (x-y plane, rotation about z, no twist) or 3"),
                 param("time.dt", "time", None, "fluid (outer) time step; the fibre takes fibre.N.substeps internal steps per dt"),
@@ -196,20 +209,39 @@ impl Component for FibreComponent {
                 param("fibre.N.bending_number", "1", Some("none"), "bending number K (S2023 eq. 18; recorded, not used by the fibre node)"),
                 param("fibre.N.beam_forces", "1", Some("\"paper\""), "cohesive beam: \"paper\" (L2020 eqs. 11-24) or \"energy-consistent\" (the same to leading order, exactly conservative to third order in the bead angles)"),
             ],
-            inputs: vec![PortDescription {
-                port: Port::BeadImpulses,
-                record: "BeadImpulse".into(),
-                description: "time-integrated hydrodynamic force and torque per bead, read in \
-                              fibre-velocities when the scene has a [fluid] table"
-                    .into(),
-            }],
-            outputs: vec![PortDescription {
-                port: Port::BeadStates,
-                record: "BeadState".into(),
-                description: "all beads, fibres in order, after configure (step 0) and after \
-                              each fibre phase (step n + 1)"
-                    .into(),
-            }],
+            inputs: vec![
+                PortDescription {
+                    port: Port::BeadImpulses,
+                    record: "BeadImpulse".into(),
+                    description: "time-integrated hydrodynamic force and torque per bead, read \
+                                  in fibre-velocities (SPM coupling)"
+                        .into(),
+                },
+                PortDescription {
+                    port: Port::BeadVelocities,
+                    record: "BeadState".into(),
+                    description: "bead velocities from the flow (S2023 eq. 5), read in \
+                                  fibre-advance (FPD coupling)"
+                        .into(),
+                },
+            ],
+            outputs: vec![
+                PortDescription {
+                    port: Port::BeadStates,
+                    record: "BeadState".into(),
+                    description: "all beads, fibres in order, after configure (step 0) and \
+                                  after fibre-positions, fibre-velocities and fibre-advance \
+                                  (step n + 1)"
+                        .into(),
+                },
+                PortDescription {
+                    port: Port::BeadForces,
+                    record: "BeadForce".into(),
+                    description: "force on each bead at the step's positions (S2023 eqs. \
+                                  10-12 plus point loads), after fibre-forces (FPD coupling)"
+                        .into(),
+                },
+            ],
             notes: vec![
                 "sub-cycling: with fibre.N.substeps = n the fibre takes n internal steps of \
                  dt / n per fluid step (n position updates in fibre-positions with n - 1 \
@@ -223,7 +255,12 @@ impl Component for FibreComponent {
                 "configure refuses a time step above the beam-stiffness limit \
                  (symplectic Euler, h omega_max < 2) and says how to fix it"
                     .into(),
-                "the FPD phases (fibre-forces, fibre-advance) are not served yet".into(),
+                "FPD coupling (fluid.method = \"fpd-lbm\", S2023 section II C): fibre-forces \
+                 publishes -dU/dR per bead; fibre-advance moves each bead by dt times the \
+                 velocity the flow gave it (S2023 eq. 5), overdamped, without bead rotation. \
+                 Only bead-spring fibres, one sub-step, no clamps: the cohesive beam needs \
+                 bead rotations, which FPD does not give"
+                    .into(),
             ],
         }
     }
@@ -238,11 +275,17 @@ impl Component for FibreComponent {
         let mut fibres = Vec::with_capacity(scene.fibres.len());
         let mut limits = Vec::new();
         let mut derived = Vec::new();
+        let fpd = scene.coupling == Coupling::Fpd;
         for (n, cfg) in scene.fibres.iter().enumerate() {
-            let f = Fibre::straight(cfg, scene.dimensions, scene.has_fluid);
+            if fpd {
+                check_fpd_fibre(n, cfg).map_err(ComponentError)?;
+            }
+            let f = Fibre::straight(cfg, scene.dimensions, scene.coupling == Coupling::Spm);
             let lim = stability_limit(&f, cfg.substeps);
             let h = scene.dt / cfg.substeps as f64;
-            if h > lim.step_limit * SAFETY {
+            // Under FPD the beads have no inertia of their own: the symplectic limit does not
+            // apply (the fluid node checks what its lattice can carry).
+            if !fpd && h > lim.step_limit * SAFETY {
                 let h_ok = lim.step_limit * SAFETY;
                 let need = (scene.dt / h_ok).ceil();
                 let advice = if need <= MAX_SUBSTEPS as f64 {
@@ -258,7 +301,7 @@ impl Component for FibreComponent {
                     scene.dt, cfg.substeps, lim.omega_max, lim.damping, lim.dt_limit
                 )));
             }
-            if lim.dt_limit.is_finite() {
+            if !fpd && lim.dt_limit.is_finite() {
                 limits.push((format!("beam stiffness (fibre.{n})"), lim.dt_limit));
             }
             let p = format!("fibre.{n}");
@@ -307,7 +350,8 @@ impl Component for FibreComponent {
 
         let total_beads = fibres.iter().map(|f| f.len()).sum();
         let mut run = Run {
-            use_impulses: scene.has_fluid,
+            coupling: scene.coupling,
+            use_impulses: scene.coupling == Coupling::Spm,
             scene,
             fibres,
             total_beads,
@@ -315,6 +359,8 @@ impl Component for FibreComponent {
             pending: None,
             states: Vec::with_capacity(total_beads),
             impulses: Vec::with_capacity(total_beads),
+            forces: Vec::with_capacity(if fpd { total_beads } else { 0 }),
+            velocities: Vec::with_capacity(if fpd { total_beads } else { 0 }),
         };
         run.publish(0, exchange)?;
         let configured = Configured {
@@ -335,7 +381,49 @@ impl Component for FibreComponent {
     ) -> Result<PhaseReport, ComponentError> {
         let run = self.run_mut()?;
         let dt = run.scene.dt;
+        let fpd_phase = matches!(phase, Phase::FibreForces | Phase::FibreAdvance);
+        if fpd_phase != (run.coupling == Coupling::Fpd) {
+            return Err(ComponentError(format!(
+                "fibre-node: phase {phase} does not belong to the {} coupling of this scene \
+                 (SPM: fibre-positions, fibre-velocities; FPD: fibre-forces, fibre-advance)",
+                run.coupling.name()
+            )));
+        }
         match phase {
+            Phase::FibreForces => {
+                run.forces.clear();
+                for f in run.fibres.iter_mut() {
+                    f.fpd_forces();
+                    run.forces
+                        .extend(f.force.iter().map(|v| BeadForce { force: (*v).into() }));
+                }
+                exchange.publish_forces(Port::BeadForces, step, &run.forces)?;
+                return Ok(run.report());
+            }
+            Phase::FibreAdvance => {
+                let header = exchange.read_states(Port::BeadVelocities, &mut run.velocities)?;
+                if run.velocities.len() != run.total_beads {
+                    return Err(ComponentError(format!(
+                        "fibre-node: {} bead velocities received for {} beads",
+                        run.velocities.len(),
+                        run.total_beads
+                    )));
+                }
+                if header.step != step + 1 {
+                    return Err(ComponentError(format!(
+                        "fibre-node: fibre-advance of step {step} read bead velocities of \
+                         step {} (expected {})",
+                        header.step,
+                        step + 1
+                    )));
+                }
+                let mut offset = 0;
+                for f in run.fibres.iter_mut() {
+                    let n = f.len();
+                    f.fpd_advance(dt, &run.velocities[offset..offset + n]);
+                    offset += n;
+                }
+            }
             Phase::FibrePositions => {
                 if let Some(p) = run.pending {
                     return Err(ComponentError(format!(
@@ -384,8 +472,8 @@ impl Component for FibreComponent {
             }
             other => {
                 return Err(ComponentError(format!(
-                    "fibre-node does not serve phase {other} (it serves fibre-positions and \
-                     fibre-velocities; the FPD coupling is not implemented yet)"
+                    "fibre-node does not serve phase {other} (it serves fibre-positions, \
+                     fibre-velocities, fibre-forces and fibre-advance)"
                 )))
             }
         }
@@ -477,6 +565,32 @@ impl Component for FibreComponent {
         run.pending = saved.pending;
         Ok(())
     }
+}
+
+/// What the FPD coupling cannot carry, refused before step 0 with the reason.
+fn check_fpd_fibre(n: usize, cfg: &crate::config::FibreConfig) -> Result<(), String> {
+    if cfg.model == ModelKind::CohesiveBeam {
+        return Err(format!(
+            "fibre.{n}.model = \"cohesive-beam\" cannot run under fluid.method = \"fpd-lbm\": \
+             FPD moves bead centres with the flow (S2023 eq. 5) and gives no bead rotation, \
+             which the cohesive beam's bending and twist are made of; use \
+             model = \"bead-spring\" (S2023 section II B)"
+        ));
+    }
+    if cfg.substeps != 1 {
+        return Err(format!(
+            "fibre.{n}.substeps = {}: under fluid.method = \"fpd-lbm\" the beads move with the \
+             flow, one position update per lattice step (S2023 section II C); set it to 1",
+            cfg.substeps
+        ));
+    }
+    if !cfg.clamp.is_empty() {
+        return Err(format!(
+            "fibre.{n}.clamp: under fluid.method = \"fpd-lbm\" a bead goes where the flow \
+             takes it (S2023 eq. 5); hold it with fibre.{n}.loads instead"
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -964,7 +1078,12 @@ mod tests {
         assert_eq!(d.kind, "fibre");
         assert_eq!(
             d.phases,
-            vec![Phase::FibrePositions, Phase::FibreVelocities]
+            vec![
+                Phase::FibrePositions,
+                Phase::FibreVelocities,
+                Phase::FibreForces,
+                Phase::FibreAdvance
+            ]
         );
         assert_eq!(d.inputs[0].port, Port::BeadImpulses);
         assert_eq!(d.outputs[0].port, Port::BeadStates);

@@ -73,9 +73,35 @@ pub struct SceneConfig {
     pub dimensions: u8,
     /// `time.dt`.
     pub dt: f64,
-    /// Whether the scene has a `[fluid]` table (then bead impulses are read).
+    /// Whether the scene has a `[fluid]` table.
     pub has_fluid: bool,
+    /// How the fluid, if any, moves the fibres (from `fluid.method`).
+    pub coupling: Coupling,
     pub fibres: Vec<FibreConfig>,
+}
+
+/// How the fibre node is coupled to the fluid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coupling {
+    /// No `[fluid]` table: the fibres move under their own and external forces.
+    None,
+    /// SPM (L2020 section 2.6): the fluid returns time-integrated forces and torques per bead
+    /// (phases fibre-positions, fibre-velocities).
+    Spm,
+    /// FPD (S2023 section II C): the fibre publishes bead forces and the fluid returns bead
+    /// velocities (phases fibre-forces, fibre-advance); `fluid.method = "fpd-lbm"`.
+    Fpd,
+}
+
+impl Coupling {
+    /// The name the model descriptions use (`"none"`, `"spm"`, `"fpd"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Coupling::None => "none",
+            Coupling::Spm => "spm",
+            Coupling::Fpd => "fpd",
+        }
+    }
 }
 
 /// Poisson ratio used for the default shear modulus `E / (2 (1 + ν))`.
@@ -184,6 +210,12 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
     let dt = scene_keys::time_step(&table)?;
 
     let has_fluid = table.contains_key("fluid");
+    // The fluid node validates `fluid.method`; here only FPD's is told apart.
+    let coupling = match table.get("fluid").and_then(|f| f.get("method")) {
+        _ if !has_fluid => Coupling::None,
+        Some(toml::Value::String(m)) if m == "fpd-lbm" => Coupling::Fpd,
+        _ => Coupling::Spm,
+    };
 
     let list = match table.get("fibre") {
         None => return Err(
@@ -219,6 +251,7 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         dimensions,
         dt,
         has_fluid,
+        coupling,
         fibres,
     })
 }

@@ -43,7 +43,7 @@ use crate::cohesive_beam::{BeamForces, CohesiveBeam};
 use crate::config::{FibreConfig, ModelKind};
 use crate::energies::Energies;
 use crate::quaternion::{advance, beam_frame, identity, Quat, Vec3};
-use cosim::BeadImpulse;
+use cosim::{BeadImpulse, BeadState};
 use std::f64::consts::PI;
 
 /// The elastic model of a fibre.
@@ -496,6 +496,23 @@ impl Fibre {
                 self.predicted_impulse[k] = Vec3::from(j.impulse);
                 self.predicted_angular_impulse[k] = Vec3::from(j.angular_impulse);
             }
+        }
+    }
+
+    /// FPD step 1 (S2023 section II C): the forces on the beads at the current positions,
+    /// `F_i = -dU/dR_i` (S2023 eqs. 10-12) plus the point loads, into `force`.
+    pub fn fpd_forces(&mut self) {
+        self.compute_forces();
+    }
+
+    /// FPD step 3 (S2023 section II C): `R^{n+1} = R^n + dt V^{n+1}`, with the bead
+    /// velocities `V^{n+1}` the flow gave (S2023 eq. 5, read from `velocities[k].velocity`),
+    /// which become the beads' velocities. Overdamped: no mass, no rotation.
+    pub fn fpd_advance(&mut self, dt: f64, velocities: &[BeadState]) {
+        for (k, v) in velocities.iter().enumerate().take(self.pos.len()) {
+            let v = Vec3::from(v.velocity);
+            self.vel[k] = v;
+            self.pos[k] += dt * v;
         }
     }
 

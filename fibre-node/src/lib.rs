@@ -17,7 +17,7 @@ pub mod quaternion;
 pub mod stability;
 
 pub use component::{FibreComponent, DIAGNOSTICS};
-pub use config::{parse_scene, FibreConfig, ModelKind, SceneConfig};
+pub use config::{parse_scene, Coupling, FibreConfig, ModelKind, SceneConfig};
 pub use energies::Energies;
 pub use fibre::Fibre;
 pub use stability::{stability_limit, StabilityLimit};
