@@ -4,6 +4,7 @@
 pub mod links;
 pub mod mcap_log;
 pub mod metrics;
+pub mod orbit;
 pub mod plot;
 pub mod reference;
 pub mod runner;
