@@ -185,8 +185,9 @@ mod tests {
             e.contains("`lbm` is not a fluid method (available: spm, fpd-lbm)"),
             "{e}"
         );
-        let e = plan_of("[time]\ndt = 1.0\nsteps = 1\n[fluid]\nmethod = \"fpd-lbm\"\n[fluid.binary]\n")
-            .unwrap_err();
+        let e =
+            plan_of("[time]\ndt = 1.0\nsteps = 1\n[fluid]\nmethod = \"fpd-lbm\"\n[fluid.binary]\n")
+                .unwrap_err();
         assert!(
             e.contains("[fluid.binary] needs fluid.method = \"spm\""),
             "{e}"
