@@ -6,12 +6,15 @@
 //! - [`smoothed_profile`]: a bead's truncated tanh profile (L2020 eq. 25);
 //! - [`spm`]: the solid fraction (eq. 26), momentum exchange (eqs. 35–36), penalty (37–38);
 //! - [`walls`]: two moving slabs normal to y and the Couette reference;
+//! - [`fpd`]: the fluid particle dynamics coupling of S2023 (bead profiles, viscosity
+//!   field, spread forces, bead velocities) on [`mrt_d2q9`];
 //! - [`mrt_d2q9`]: a standalone MRT lattice Boltzmann D2Q9 solver with per-node viscosity and
 //!   Guo forcing, bounce-back walls (the flow solver of FPD on MRT-LBM, S2023);
 //! - [`stability`]: time-step limits; [`config`]: the `[fluid]`/`[walls]` part of a scene;
 //! - [`component`]: [`FluidComponent`], the [`cosim::Component`] the executable serves.
 pub mod component;
 pub mod config;
+pub mod fpd;
 pub mod grid;
 pub mod mrt_d2q9;
 pub mod parallel;
