@@ -3,6 +3,8 @@
 //!
 //! - [`spectral_ns`]: the flow solver (exact viscous decay, dealiased advection, projection;
 //!   L2020 eq. 34) on [`transform`]'s planned real FFTs over a [`grid::Grid`];
+//! - [`cahn_hilliard`]: the ternary Cahn–Hilliard phase field of L2020 (eqs. 27–34),
+//!   semi-implicit spectral step, capillary force, wall equilibria for the contact angle;
 //! - [`smoothed_profile`]: a bead's truncated tanh profile (L2020 eq. 25);
 //! - [`spm`]: the solid fraction (eq. 26), momentum exchange (eqs. 35–36), penalty (37–38);
 //! - [`walls`]: two moving slabs normal to y and the Couette reference;
@@ -12,6 +14,7 @@
 //!   Guo forcing, bounce-back walls (the flow solver of FPD on MRT-LBM, S2023);
 //! - [`stability`]: time-step limits; [`config`]: the `[fluid]`/`[walls]` part of a scene;
 //! - [`component`]: [`FluidComponent`], the [`cosim::Component`] the executable serves.
+pub mod cahn_hilliard;
 pub mod component;
 pub mod config;
 pub mod fpd;
