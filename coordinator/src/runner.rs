@@ -576,7 +576,8 @@ fn drive(
             .map_err(|e| fail(format!("reading the final bead states: {e}")))?;
     }
     let mut impulses = Vec::new();
-    if plan.nodes.contains(&"fluid") && has_beads {
+    // Impulses exist under SPM only (FPD exchanges forces and velocities).
+    if plan.coupling == "spm" && has_beads {
         exchange
             .read_impulses(Port::BeadImpulses, &mut impulses)
             .map_err(|e| fail(format!("reading the final impulses: {e}")))?;

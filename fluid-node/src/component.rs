@@ -54,6 +54,8 @@ const STATE_FORMAT: &str = "fluid-node-state/1";
 #[derive(Default)]
 pub struct FluidComponent {
     run: Option<Run>,
+    /// `fluid.method = "fpd-lbm"`: the FPD lattice instead of the SPM solver.
+    fpd: Option<crate::fpd_lbm::FpdRun>,
 }
 
 struct Run {
@@ -191,14 +193,21 @@ impl Component for FluidComponent {
                       2/3-dealiased advection), 2D or 3D, with optional moving walls"
                 .into(),
             kind: "fluid".into(),
-            models: vec!["spm".into()],
-            coupling_schemes: vec!["spm".into()],
+            models: vec!["spm".into(), "fpd-lbm".into()],
+            coupling_schemes: vec!["spm".into(), "fpd".into()],
             effects: vec![effects::HYDRODYNAMICS.into(), effects::WALLS.into()],
-            phases: vec![Phase::FluidMomentumExchange, Phase::FluidPenalty],
+            phases: vec![
+                Phase::FluidMomentumExchange,
+                Phase::FluidPenalty,
+                Phase::FluidLatticeStep,
+            ],
             parameters: vec![
                 param("dimensions", "1", Some("3"), "2 (x-y plane) or 3"),
                 param("time.dt", "time", None, "time step of the fractional step"),
-                param("fluid.method", "1", None, "\"spm\" (Smoothed Profile Method)"),
+                param("fluid.method", "1", None, "\"spm\" (Smoothed Profile Method, L2020) or \"fpd-lbm\" (fluid particle dynamics on MRT lattice Boltzmann D2Q9, S2023; 2D, lattice units, time.dt = 1)"),
+                param("fluid.viscosity_ratio", "1", Some("100"), "fpd-lbm: r_eta = eta_s / eta_f (S2023 eq. 1)"),
+                param("fluid.interface_ratio", "1", Some("0.125"), "fpd-lbm: r_xi = xi / d of the bead profile (S2023 eq. 2)"),
+                param("fluid.profile_cutoff", "1", Some("5"), "fpd-lbm: profile cut-off in interface thicknesses xi"),
                 param("fluid.grid", "1", None, "[nx, ny] (2D) or [nx, ny, nz] (3D) nodes, spacing 1 (grid units); each >= 8, any size"),
                 param("fluid.viscosity", "mass / (length time)", None, "dynamic viscosity eta"),
                 param("fluid.density", "mass / length^3", Some("1.0"), "density rho"),
@@ -211,20 +220,36 @@ impl Component for FluidComponent {
                 param("fibre.N.beads", "1", None, "beads of fibre N (read for the number of bead records)"),
                 param("fibre.N.bead_radius", len, None, "bead radius r_b of fibre N (eq. 25)"),
             ],
-            inputs: vec![PortDescription {
+            inputs: vec![
+            PortDescription {
                 port: Port::BeadStates,
                 record: "BeadState".into(),
                 description: "all beads, fibres in order: positions n+1 with velocities n \
                               (fluid-momentum-exchange) and n+1 (fluid-penalty), published \
                               with step n+1; read only when the scene has fibres"
                     .into(),
+            },
+            PortDescription {
+                port: Port::BeadForces,
+                record: "BeadForce".into(),
+                description: "fpd-lbm: force on each bead at the step's positions, read in \
+                              fluid-lattice-step and spread as a force density (S2023 eq. 4)"
+                    .into(),
             }],
-            outputs: vec![PortDescription {
+            outputs: vec![
+            PortDescription {
                 port: Port::BeadImpulses,
                 record: "BeadImpulse".into(),
                 description: "time-integrated hydrodynamic force and torque per bead over \
                               step n (L2020 eqs. 35-36), published with step n+1 after \
                               fluid-momentum-exchange; in 2D the angular impulse is along z"
+                    .into(),
+            },
+            PortDescription {
+                port: Port::BeadVelocities,
+                record: "BeadState".into(),
+                description: "fpd-lbm: profile-weighted bead velocities of the new flow \
+                              (S2023 eq. 5), published with step n+1 after fluid-lattice-step"
                     .into(),
             }],
             notes: vec![
@@ -244,8 +269,13 @@ impl Component for FluidComponent {
                 "walls are penalised like beads of prescribed velocity; no impulse is \
                  published for them"
                     .into(),
-                "Cahn-Hilliard (fluid.binary, phase fluid-phase-field) and FPD on lattice \
-                 Boltzmann are not available yet"
+                "fpd-lbm: one phase per step, fluid-lattice-step (read bead positions and \
+                 forces, S2023 eqs. 1, 2, 4; one MRT step; publish the bead velocities of \
+                 eq. 5 on bead-velocities). Walls are half-way bounce-back planes at y = -1/2 \
+                 and ny - 1/2; configure refuses wall Mach numbers above 0.3 and a run stops \
+                 above 0.7"
+                    .into(),
+                "Cahn-Hilliard (fluid.binary, phase fluid-phase-field) is not coupled yet"
                     .into(),
             ],
         }
@@ -257,6 +287,17 @@ impl Component for FluidComponent {
         _exchange: &mut dyn Exchange,
     ) -> Result<Configured, ComponentError> {
         self.run = None;
+        self.fpd = None;
+        let table = cosim::scene_keys::parse_table(scene_toml).map_err(ComponentError)?;
+        let method = table
+            .get("fluid")
+            .and_then(|f| f.get("method"))
+            .and_then(|m| m.as_str());
+        if method == Some("fpd-lbm") {
+            let (run, configured) = crate::fpd_lbm::FpdRun::configure(scene_toml)?;
+            self.fpd = Some(run);
+            return Ok(configured);
+        }
         let cfg = parse_scene(scene_toml).map_err(ComponentError)?;
         let limits = stability::check(&cfg).map_err(ComponentError)?;
         let grid = Grid::new(cfg.dimensions, cfg.grid);
@@ -364,6 +405,15 @@ impl Component for FluidComponent {
         phase: Phase,
         exchange: &mut dyn Exchange,
     ) -> Result<PhaseReport, ComponentError> {
+        if let Some(fpd) = self.fpd.as_mut() {
+            return match phase {
+                Phase::FluidLatticeStep => fpd.lattice_step(step, exchange),
+                other => Err(ComponentError(format!(
+                    "fluid-node: phase {other} does not belong to fluid.method = \"fpd-lbm\" \
+                     (it runs fluid-lattice-step)"
+                ))),
+            };
+        }
         let run = self.run_mut()?;
         let has_beads = run.total_beads > 0;
         match phase {
@@ -438,6 +488,11 @@ impl Component for FluidComponent {
     }
 
     fn save_state(&self) -> Result<Vec<u8>, ComponentError> {
+        if self.fpd.is_some() {
+            return Err(ComponentError::new(
+                "fluid-node: saving the state of an fpd-lbm fluid is not implemented yet",
+            ));
+        }
         let run = self
             .run
             .as_ref()

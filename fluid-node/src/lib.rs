@@ -10,6 +10,7 @@
 //! - [`walls`]: two moving slabs normal to y and the Couette reference;
 //! - [`fpd`]: the fluid particle dynamics coupling of S2023 (bead profiles, viscosity
 //!   field, spread forces, bead velocities) on [`mrt_d2q9`];
+//! - [`fpd_lbm`]: `fluid.method = "fpd-lbm"`, the FPD phase of the fluid node on the lattice;
 //! - [`mrt_d2q9`]: a standalone MRT lattice Boltzmann D2Q9 solver with per-node viscosity and
 //!   Guo forcing, bounce-back walls (the flow solver of FPD on MRT-LBM, S2023);
 //! - [`stability`]: time-step limits; [`config`]: the `[fluid]`/`[walls]` part of a scene;
@@ -18,6 +19,7 @@ pub mod cahn_hilliard;
 pub mod component;
 pub mod config;
 pub mod fpd;
+pub mod fpd_lbm;
 pub mod grid;
 pub mod mrt_d2q9;
 pub mod parallel;

@@ -62,12 +62,16 @@ fn description_names_the_contract() {
     let d = FluidComponent::new().describe();
     assert_eq!(d.name, "fluid-node");
     assert_eq!(d.kind, "fluid");
-    assert_eq!(d.models, vec!["spm"]);
-    assert_eq!(d.coupling_schemes, vec!["spm"]);
+    assert_eq!(d.models, vec!["spm", "fpd-lbm"]);
+    assert_eq!(d.coupling_schemes, vec!["spm", "fpd"]);
     assert_eq!(d.effects, vec!["hydrodynamics", "walls"]);
     assert_eq!(
         d.phases,
-        vec![Phase::FluidMomentumExchange, Phase::FluidPenalty]
+        vec![
+            Phase::FluidMomentumExchange,
+            Phase::FluidPenalty,
+            Phase::FluidLatticeStep
+        ]
     );
     assert_eq!(d.inputs[0].port, Port::BeadStates);
     assert_eq!(d.outputs[0].port, Port::BeadImpulses);

@@ -1,0 +1,389 @@
+//! `fluid.method = "fpd-lbm"`: the fluid node's FPD phase on the MRT lattice (S2023 section
+//! II C; DESIGN.md, "FPD coupling").
+//!
+//! One phase per step, `fluid-lattice-step` (step n): read the bead positions R^n
+//! ([`Port::BeadStates`]) and forces F^n ([`Port::BeadForces`]), place the profiles and write
+//! the viscosity field and the force density (S2023 eqs. 1, 2, 4; [`FpdCoupling::apply`]),
+//! take one lattice step to v^{n+1}, and publish the bead velocities V^{n+1} (eq. 5) on
+//! [`Port::BeadVelocities`] with step n+1. The fibre node then moves the beads,
+//! R^{n+1} = R^n + dt V^{n+1}.
+//!
+//! Units are lattice units: grid spacing 1 and `time.dt` = 1 (refused otherwise, so a scene
+//! cannot silently mean another time step). The lattice is `fluid.grid = [nx, ny]`, periodic
+//! in x; with `walls.velocity = [bottom, top]` the bounce-back walls lie at y = -1/2 and
+//! y = ny - 1/2 (gap H = ny), otherwise y is periodic.
+use crate::fpd::{FpdConfig, FpdCoupling};
+use crate::mrt_d2q9::{MrtConfig, MrtD2q9, YBoundary};
+use cosim::scene_keys::{self, deserialize_at};
+use cosim::{BeadForce, BeadState, ComponentError, Configured, Exchange, PhaseReport, Port};
+use serde::Deserialize;
+
+/// Largest accepted wall Mach number |u_w| / c_s (c_s = 1/sqrt 3): the lattice's
+/// compressibility error grows as Ma^2, and S2023-type runs stay far below this.
+pub const MAX_WALL_MACH: f64 = 0.3;
+/// A run stops when the flow's Mach number exceeds this: the lattice no longer carries it.
+pub const ABORT_MACH: f64 = 0.7;
+
+/// Diagnostics after `fluid-lattice-step`, in their fixed order; with walls
+/// [`crate::COUETTE_DIAGNOSTIC`] follows.
+pub const FPD_DIAGNOSTICS: [&str; 3] = ["max_mach", "total_bead_force_x", "total_bead_force_y"];
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFluid {
+    method: String,
+    grid: Vec<i64>,
+    viscosity: f64,
+    density: Option<f64>,
+    viscosity_ratio: Option<f64>,
+    interface_ratio: Option<f64>,
+    profile_cutoff: Option<f64>,
+    initial_velocity: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawWalls {
+    velocity: [f64; 2],
+}
+
+/// The validated FPD part of a scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FpdScene {
+    pub nx: usize,
+    pub ny: usize,
+    /// Dynamic viscosity of the fluid eta_f (`fluid.viscosity`).
+    pub viscosity: f64,
+    /// Reference density rho0 (`fluid.density`, default 1).
+    pub density: f64,
+    /// `[bottom, top]` wall velocities along x, if the scene has walls.
+    pub walls: Option<[f64; 2]>,
+    /// Start from the linear profile between the walls (`fluid.initial_velocity = "couette"`).
+    pub couette_start: bool,
+    pub coupling: FpdConfig,
+    /// Beads per fibre, fibres in order.
+    pub beads: Vec<usize>,
+    /// `fibre.N.bending_stiffness` of each fibre, where given (for the bending number K).
+    pub bending_stiffness: Vec<Option<f64>>,
+}
+
+fn err(msg: impl Into<String>) -> String {
+    msg.into()
+}
+
+/// Read and check the FPD part of a scene.
+pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
+    let table = scene_keys::parse_table(scene_toml)?;
+    if scene_keys::dimensions(&table)? != 2 {
+        return Err(err(
+            "dimensions: fluid.method = \"fpd-lbm\" is the 2D D2Q9 lattice of S2023; set dimensions = 2",
+        ));
+    }
+    let dt = scene_keys::time_step(&table)?;
+    if dt != 1.0 {
+        return Err(format!(
+            "time.dt = {dt}: fluid.method = \"fpd-lbm\" runs in lattice units, one lattice step \
+             per step; set time.dt = 1 and express viscosity and velocities per lattice step"
+        ));
+    }
+    let fluid = table.get("fluid").cloned().ok_or("fluid: missing")?;
+    let raw: RawFluid = deserialize_at("fluid", fluid)?;
+    debug_assert_eq!(raw.method, "fpd-lbm");
+    let [nx, ny] = match raw.grid.as_slice() {
+        [nx, ny] if *nx >= 8 && *ny >= 8 => [*nx as usize, *ny as usize],
+        _ => {
+            return Err(format!(
+                "fluid.grid: expected [nx, ny] with each at least 8, got {:?}",
+                raw.grid
+            ))
+        }
+    };
+    let viscosity = scene_keys::positive("fluid.viscosity", raw.viscosity)?;
+    let density = scene_keys::positive("fluid.density", raw.density.unwrap_or(1.0))?;
+    let couette_start = match raw.initial_velocity.as_deref() {
+        None | Some("rest") => false,
+        Some("couette") => true,
+        Some(other) => {
+            return Err(format!(
+                "fluid.initial_velocity: expected \"rest\" or \"couette\", got {other:?}"
+            ))
+        }
+    };
+    let walls = match table.get("walls") {
+        None => None,
+        Some(w) => {
+            let w: RawWalls = deserialize_at("walls", w.clone()).map_err(|e| {
+                if e.contains("thickness") {
+                    format!(
+                        "{e}; under fluid.method = \"fpd-lbm\" the walls are bounce-back planes \
+                         at y = -1/2 and ny - 1/2 and have no thickness"
+                    )
+                } else {
+                    e
+                }
+            })?;
+            for (k, u) in w.velocity.iter().enumerate() {
+                let mach = u.abs() * 3f64.sqrt();
+                if mach.is_nan() || mach > MAX_WALL_MACH {
+                    return Err(format!(
+                        "walls.velocity.{k} = {u}: Mach number |u| sqrt 3 = {mach:.3} exceeds the \
+                         lattice's limit {MAX_WALL_MACH} (compressibility error ~ Ma^2); lower \
+                         the wall speed (and raise the viscosity to keep the Reynolds number)"
+                    ));
+                }
+            }
+            Some(w.velocity)
+        }
+    };
+    if couette_start && walls.is_none() {
+        return Err(err(
+            "fluid.initial_velocity = \"couette\" needs walls.velocity",
+        ));
+    }
+
+    let mut beads = Vec::new();
+    let mut bending_stiffness = Vec::new();
+    let mut radius: Option<f64> = None;
+    if let Some(toml::Value::Array(list)) = table.get("fibre") {
+        for (n, f) in list.iter().enumerate() {
+            let get = |k: &str| {
+                f.get(k)
+                    .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+            };
+            let b = f.get("beads").and_then(|v| v.as_integer()).unwrap_or(0);
+            let r = get("bead_radius").ok_or(format!("fibre.{n}.bead_radius: required"))?;
+            match radius {
+                Some(r0) if r0 != r => {
+                    return Err(format!(
+                        "fibre.{n}.bead_radius = {r}: under fluid.method = \"fpd-lbm\" all beads \
+                         share one radius (fibre.0 has {r0})"
+                    ))
+                }
+                _ => radius = Some(r),
+            }
+            beads.push(b.max(0) as usize);
+            bending_stiffness.push(get("bending_stiffness"));
+        }
+    }
+    let mut coupling = FpdConfig::new(radius.unwrap_or(1.0), viscosity / density);
+    if let Some(r) = raw.viscosity_ratio {
+        coupling.viscosity_ratio = r;
+    }
+    if let Some(r) = raw.interface_ratio {
+        coupling.interface_ratio = r;
+    }
+    if let Some(c) = raw.profile_cutoff {
+        coupling.cutoff = c;
+    }
+    Ok(FpdScene {
+        nx,
+        ny,
+        viscosity,
+        density,
+        walls,
+        couette_start,
+        coupling,
+        beads,
+        bending_stiffness,
+    })
+}
+
+/// A configured FPD fluid: lattice, coupling and exchange buffers.
+pub struct FpdRun {
+    pub scene: FpdScene,
+    pub lattice: MrtD2q9,
+    coupling: Option<FpdCoupling>,
+    total_beads: usize,
+    states: Vec<BeadState>,
+    forces: Vec<BeadForce>,
+    positions: Vec<[f64; 2]>,
+    force2: Vec<[f64; 2]>,
+    velocities: Vec<[f64; 2]>,
+    out: Vec<BeadState>,
+    ux: Vec<f64>,
+    uy: Vec<f64>,
+}
+
+impl FpdRun {
+    /// Plan the lattice and the coupling; what the node derives goes into `Configured`.
+    pub fn configure(scene_toml: &str) -> Result<(Self, Configured), ComponentError> {
+        let scene = parse_fpd_scene(scene_toml).map_err(ComponentError)?;
+        let y_boundary = match scene.walls {
+            Some([bottom, top]) => YBoundary::Walls { bottom, top },
+            None => YBoundary::Periodic,
+        };
+        let nu = scene.viscosity / scene.density;
+        let mut mc = MrtConfig::new(scene.nx, scene.ny, y_boundary, nu);
+        mc.density = scene.density;
+        let mut lattice =
+            MrtD2q9::new(mc).map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?;
+        if scene.couette_start {
+            let [b, t] = scene.walls.unwrap_or([0.0; 2]);
+            let ny = scene.ny as f64;
+            lattice
+                .initialize_with(|_, y| (scene.density, b + (t - b) * (y as f64 + 0.5) / ny, 0.0))
+                .map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?;
+        }
+        let total_beads: usize = scene.beads.iter().sum();
+        let coupling = if total_beads > 0 {
+            Some(
+                FpdCoupling::new(scene.coupling, &mut lattice, total_beads)
+                    .map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?,
+            )
+        } else {
+            None
+        };
+
+        let mut derived = vec![
+            ("fluid.kinematic_viscosity".to_string(), nu),
+            (
+                "fluid.viscosity_ratio".into(),
+                scene.coupling.viscosity_ratio,
+            ),
+            (
+                "fluid.interface_ratio".into(),
+                scene.coupling.interface_ratio,
+            ),
+            ("fluid.interface_thickness".into(), scene.coupling.xi()),
+        ];
+        let mut active = Vec::new();
+        if total_beads > 0 {
+            active.push(cosim::effects::HYDRODYNAMICS.to_string());
+        }
+        if let Some([b, t]) = scene.walls {
+            active.push(cosim::effects::WALLS.to_string());
+            let h = scene.ny as f64;
+            let gamma = (t - b) / h;
+            derived.push(("fluid.gap".into(), h));
+            derived.push(("fluid.shear_rate".into(), gamma));
+            if let Some(&n) = scene.beads.first() {
+                // S2023 eq. 18: l_c = N d, C = l_c / H, Re_ps = rho gamma l_c^2 / (4 eta_f),
+                // K = 2 k_b / (eta_f gamma l_c^2).
+                let lc = n as f64 * 2.0 * scene.coupling.radius;
+                derived.push(("fluid.confinement".into(), lc / h));
+                derived.push((
+                    "fluid.particle_shear_reynolds".into(),
+                    scene.density * gamma.abs() * lc * lc / (4.0 * scene.viscosity),
+                ));
+                if let (Some(Some(kb)), true) = (scene.bending_stiffness.first(), gamma != 0.0) {
+                    derived.push((
+                        "fluid.bending_number".into(),
+                        2.0 * kb / (scene.viscosity * gamma.abs() * lc * lc),
+                    ));
+                }
+            }
+        }
+        let n = scene.nx * scene.ny;
+        let run = FpdRun {
+            lattice,
+            coupling,
+            total_beads,
+            states: Vec::with_capacity(total_beads),
+            forces: Vec::with_capacity(total_beads),
+            positions: vec![[0.0; 2]; total_beads],
+            force2: vec![[0.0; 2]; total_beads],
+            velocities: vec![[0.0; 2]; total_beads],
+            out: Vec::with_capacity(total_beads),
+            ux: vec![0.0; n],
+            uy: vec![0.0; n],
+            scene,
+        };
+        let configured = Configured {
+            beads_per_fibre: Vec::new(),
+            effects: active,
+            time_step_limits: Vec::new(),
+            derived,
+        };
+        Ok((run, configured))
+    }
+
+    /// Phase `fluid-lattice-step` of step `step`.
+    pub fn lattice_step(
+        &mut self,
+        step: u64,
+        exchange: &mut dyn Exchange,
+    ) -> Result<PhaseReport, ComponentError> {
+        let fail = |e: crate::fpd::FpdError| ComponentError(format!("fluid (fpd-lbm): {e}"));
+        let (mut fx, mut fy) = (0.0, 0.0);
+        if let Some(c) = self.coupling.as_mut() {
+            let hs = exchange.read_states(Port::BeadStates, &mut self.states)?;
+            let hf = exchange.read_forces(Port::BeadForces, &mut self.forces)?;
+            if hs.step != step || hf.step != step {
+                return Err(ComponentError(format!(
+                    "fluid (fpd-lbm): fluid-lattice-step of step {step} read bead states of step \
+                     {} and forces of step {}",
+                    hs.step, hf.step
+                )));
+            }
+            if self.states.len() != self.total_beads || self.forces.len() != self.total_beads {
+                return Err(ComponentError(format!(
+                    "fluid (fpd-lbm): {} bead states and {} forces received for {} beads",
+                    self.states.len(),
+                    self.forces.len(),
+                    self.total_beads
+                )));
+            }
+            for k in 0..self.total_beads {
+                let p = self.states[k].position;
+                let f = self.forces[k].force;
+                self.positions[k] = [p[0], p[1]];
+                self.force2[k] = [f[0], f[1]];
+                fx += f[0];
+                fy += f[1];
+            }
+            c.apply(&mut self.lattice, &self.positions, &self.force2)
+                .map_err(fail)?;
+            self.lattice.step();
+            c.bead_velocities(&self.lattice, &mut self.velocities)
+                .map_err(fail)?;
+            self.out.clear();
+            for k in 0..self.total_beads {
+                let mut s = self.states[k];
+                s.velocity = [self.velocities[k][0], self.velocities[k][1], 0.0];
+                s.angular_velocity = [0.0; 3];
+                self.out.push(s);
+            }
+            exchange.publish_states(Port::BeadVelocities, step + 1, &self.out)?;
+        } else {
+            self.lattice.step();
+        }
+        let mach = self.lattice.max_mach();
+        if mach.is_nan() || mach > ABORT_MACH {
+            return Err(ComponentError(format!(
+                "fluid (fpd-lbm): the flow's Mach number reached {mach:.3} at step {step} \
+                 (limit {ABORT_MACH}): the lattice cannot carry it; lower the forces or wall \
+                 speeds"
+            )));
+        }
+        let mut diagnostics = vec![
+            (FPD_DIAGNOSTICS[0].to_string(), mach),
+            (FPD_DIAGNOSTICS[1].to_string(), fx),
+            (FPD_DIAGNOSTICS[2].to_string(), fy),
+        ];
+        if let Some([b, t]) = self.scene.walls {
+            diagnostics.push((
+                crate::COUETTE_DIAGNOSTIC.to_string(),
+                self.couette_error(b, t),
+            ));
+        }
+        Ok(PhaseReport { diagnostics })
+    }
+
+    /// Largest deviation of the row-averaged x-velocity from the linear Couette profile
+    /// between the wall planes, over |top - bottom|.
+    fn couette_error(&mut self, b: f64, t: f64) -> f64 {
+        self.lattice.velocity(&mut self.ux, &mut self.uy);
+        let (nx, ny) = (self.scene.nx, self.scene.ny);
+        let du = (t - b).abs();
+        if du == 0.0 {
+            return 0.0;
+        }
+        let mut worst: f64 = 0.0;
+        for y in 0..ny {
+            let mean = self.ux[y * nx..(y + 1) * nx].iter().sum::<f64>() / nx as f64;
+            let exact = b + (t - b) * (y as f64 + 0.5) / ny as f64;
+            worst = worst.max((mean - exact).abs() / du);
+        }
+        worst
+    }
+}

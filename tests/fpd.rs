@@ -1,0 +1,132 @@
+//! The FPD coupling (S2023 section II C, `fluid.method = "fpd-lbm"`) through the coordinator:
+//! fibre node and lattice fluid node as three processes and in one process.
+mod common;
+use common::*;
+use coordinator::mcap_log::read_topic;
+
+fn run_cli(name: &str, overrides: &[&str], extra: &[&str]) -> Result<std::path::PathBuf, String> {
+    let out = out_dir(name);
+    let cfg = config("fpd/fibre_in_shear.toml");
+    let mut args: Vec<String> = vec![
+        "run".into(),
+        cfg.display().to_string(),
+        "--quiet".into(),
+        "--out".into(),
+        out.display().to_string(),
+    ];
+    for o in overrides {
+        args.push("--set".into());
+        args.push(o.to_string());
+    }
+    args.extend(extra.iter().map(|s| s.to_string()));
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    let o = coordinator(&refs);
+    if o.status.success() {
+        Ok(out)
+    } else {
+        Err(String::from_utf8_lossy(&o.stderr).into_owned())
+    }
+}
+
+fn angle(state: &serde_json::Value) -> f64 {
+    let s = state["states"].as_array().unwrap();
+    let (a, b) = (&s[0], &s[s.len() - 1]);
+    let dx = b[0].as_f64().unwrap() - a[0].as_f64().unwrap();
+    let dy = b[1].as_f64().unwrap() - a[1].as_f64().unwrap();
+    dy.atan2(dx).to_degrees()
+}
+
+/// Three processes and one process give the same bits, and the fibre, started across the
+/// flow, turns clockwise as a shear flow turns it.
+#[test]
+fn fpd_run_is_identical_as_processes_and_in_process() {
+    let short = ["time.steps=3000"];
+    let a = run_cli("fpd-layout-processes", &short, &[]).unwrap();
+    let b = run_cli("fpd-layout-in-process", &short, &["--in-process"]).unwrap();
+    let sa = read_topic(&a.join("run.mcap"), "/fibre/bead_states").unwrap();
+    let sb = read_topic(&b.join("run.mcap"), "/fibre/bead_states").unwrap();
+    assert_eq!(sa.len(), 7);
+    assert_eq!(sa, sb, "bead trajectories differ between process layouts");
+    let (first, last) = (angle(&sa[0]), angle(&sa[6]));
+    println!("fibre angle {first:.2} -> {last:.2} deg");
+    assert!(
+        first == 90.0 && last < 45.0,
+        "the fibre should turn clockwise from the vertical, went {first} -> {last}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(a.join("summary.json")).unwrap()).unwrap();
+    // S2023 eq. 18 from the scene: l_c = 40, H = 64, gamma = 0.04 / 64, eta_f = 0.5.
+    let d = &summary["derived"];
+    let close = |k: &str, v: f64| {
+        let got = d[k].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            (got - v).abs() < 1e-12 * v.abs().max(1.0),
+            "{k} = {got}, expected {v}"
+        );
+    };
+    close("fluid.confinement", 40.0 / 64.0);
+    close("fluid.particle_shear_reynolds", 0.000625 * 1600.0 / 2.0);
+    close(
+        "fluid.bending_number",
+        2.0 * 1.65 / (0.5 * 0.000625 * 1600.0),
+    );
+}
+
+/// Without a fibre the lattice carries plane Couette flow: started from rest it relaxes to
+/// the linear profile between the bounce-back walls (reference: the linear profile; the
+/// viscous time H^2 / nu is 8192 steps, so 6 of them leave e^-6 of the first mode).
+#[test]
+fn fpd_couette_without_fibres_is_linear() {
+    let out = run_cli(
+        "fpd-couette",
+        &[
+            "fibre=[]",
+            "fluid.initial_velocity=\"rest\"",
+            "time.steps=50000",
+            "analysis.metrics=[\"couette_max_error\"]",
+        ],
+        &["--in-process"],
+    )
+    .unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let err = summary["metrics"]["couette_max_error"]["value"]
+        .as_f64()
+        .unwrap();
+    println!("couette_max_error = {err:.3e}");
+    assert!(
+        err < 0.01,
+        "Couette profile off by {:.3} % of the wall speed",
+        100.0 * err
+    );
+}
+
+/// What FPD cannot carry is refused before step 0 with the reason.
+#[test]
+fn fpd_refuses_what_it_cannot_carry() {
+    let e = run_cli(
+        "fpd-refuse-beam",
+        &[
+            "fibre=[{model=\"cohesive-beam\", beads=3, bead_radius=4.0, youngs_modulus=1.0, \
+             start=[48.0, 24.0, 0.0]}]",
+        ],
+        &["--in-process"],
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("cannot run under fluid.method = \"fpd-lbm\""),
+        "{e}"
+    );
+    let e = run_cli("fpd-refuse-dt", &["time.dt=0.5"], &["--in-process"]).unwrap_err();
+    assert!(
+        e.contains("time.dt = 0.5") && e.contains("lattice units"),
+        "{e}"
+    );
+    let e = run_cli(
+        "fpd-refuse-mach",
+        &["walls.velocity=[-0.3,0.3]"],
+        &["--in-process"],
+    )
+    .unwrap_err();
+    assert!(e.contains("Mach number"), "{e}");
+}
