@@ -5,27 +5,8 @@ use common::*;
 use coordinator::mcap_log::read_topic;
 
 fn run_cli(name: &str, overrides: &[&str], extra: &[&str]) -> Result<std::path::PathBuf, String> {
-    let out = out_dir(name);
-    let cfg = config("fpd/fibre_in_shear.toml");
-    let mut args: Vec<String> = vec![
-        "run".into(),
-        cfg.display().to_string(),
-        "--quiet".into(),
-        "--out".into(),
-        out.display().to_string(),
-    ];
-    for o in overrides {
-        args.push("--set".into());
-        args.push(o.to_string());
-    }
-    args.extend(extra.iter().map(|s| s.to_string()));
-    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
-    let o = coordinator(&refs);
-    if o.status.success() {
-        Ok(out)
-    } else {
-        Err(String::from_utf8_lossy(&o.stderr).into_owned())
-    }
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    run_scene(name, &config("fpd/fibre_in_shear.toml"), &o, extra)
 }
 
 fn angle(state: &serde_json::Value) -> f64 {

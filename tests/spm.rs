@@ -56,28 +56,8 @@ fn small_shear(model: &str) -> Vec<String> {
 }
 
 fn run_cli(name: &str, overrides: &[String], extra: &[&str]) -> std::path::PathBuf {
-    let out = out_dir(name);
-    let cfg = config("spm/jeffery_rigid.toml");
-    let mut args: Vec<String> = vec![
-        "run".into(),
-        cfg.display().to_string(),
-        "--quiet".into(),
-        "--out".into(),
-        out.display().to_string(),
-    ];
-    for o in overrides {
-        args.push("--set".into());
-        args.push(o.clone());
-    }
-    args.extend(extra.iter().map(|s| s.to_string()));
-    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
-    let o = coordinator(&refs);
-    assert!(
-        o.status.success(),
-        "{name}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    out
+    run_scene(name, &config("spm/jeffery_rigid.toml"), overrides, extra)
+        .unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 /// Three processes (coordinator, fibre node, fluid node) and one process give the same bits.

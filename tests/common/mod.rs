@@ -88,3 +88,24 @@ pub fn run_command(cfg: &Path, out: &Path) -> Command {
         .current_dir(root());
     c
 }
+
+/// `coordinator run CFG --quiet --out <out_dir(name)> --set O... EXTRA...`: the output
+/// directory on success, the coordinator's standard error otherwise.
+pub fn run_scene(
+    name: &str,
+    cfg: &Path,
+    overrides: &[String],
+    extra: &[&str],
+) -> Result<PathBuf, String> {
+    let out = out_dir(name);
+    let mut c = run_command(cfg, &out);
+    for o in overrides {
+        c.args(["--set", o]);
+    }
+    let o = c.args(extra).output().expect("start coordinator");
+    if o.status.success() {
+        Ok(out)
+    } else {
+        Err(String::from_utf8_lossy(&o.stderr).into_owned())
+    }
+}
