@@ -105,12 +105,6 @@ pub struct CahnHilliard {
     steps: u64,
 }
 
-/// `(ky index, kz index)` of spectral row `r`.
-#[inline]
-fn row_indices(g: Grid, r: usize) -> (usize, usize) {
-    (r % g.ny, r / g.ny)
-}
-
 /// `i k p`.
 #[inline]
 fn times_ik(k: f64, p: Complex64) -> Complex64 {
@@ -290,7 +284,7 @@ impl CahnHilliard {
             let flux = &self.tmp_hat;
             let mut fields = [&mut self.adv_hat[..]];
             for_each_row(&mut fields, nxh, |r, rows| {
-                let (iy, iz) = row_indices(g, r);
+                let (iy, iz) = g.row_yz(r);
                 let keep_yz = w.y.keep[iy] && w.z.keep[iz];
                 for ix in 0..nxh {
                     if keep_yz && w.x.keep[ix] {
@@ -344,7 +338,7 @@ impl CahnHilliard {
         let (gh, adv) = (&self.g_hat, &self.adv_hat);
         let mut fields = [&mut self.psi_hat[..]];
         for_each_row(&mut fields, nxh, |r, rows| {
-            let (iy, iz) = row_indices(g, r);
+            let (iy, iz) = g.row_yz(r);
             let k2yz = w.y.k2[iy] + w.z.k2[iz];
             for (ix, v) in rows[0].iter_mut().enumerate() {
                 let i = r * nxh + ix;
@@ -406,7 +400,7 @@ impl CahnHilliard {
         let (gh, ph) = (&self.g_hat, &self.psi_hat);
         let mut fields = [&mut self.tmp_hat[..]];
         for_each_row(&mut fields, nxh, |r, rows| {
-            let (iy, iz) = row_indices(g, r);
+            let (iy, iz) = g.row_yz(r);
             let k2yz = w.y.k2[iy] + w.z.k2[iz];
             for (ix, v) in rows[0].iter_mut().enumerate() {
                 let i = r * nxh + ix;
@@ -440,25 +434,30 @@ impl CahnHilliard {
             .for_each(|(m, (&p, (&f, &s)))| *m = 3.0 * e0 * f * (p - s) * (p - s));
     }
 
+    /// `work := ∂_c` of `psi_hat` (`of_psi`) or of `tmp_hat`, by a spectral derivative
+    /// through `g_hat`.
+    fn derivative_into_work(&mut self, c: usize, of_psi: bool) {
+        let g = self.grid;
+        let nxh = g.nxh();
+        let w = &self.waves;
+        let src = if of_psi { &self.psi_hat } else { &self.tmp_hat };
+        let mut fields = [&mut self.g_hat[..]];
+        for_each_row(&mut fields, nxh, |r, rows| {
+            let (iy, iz) = g.row_yz(r);
+            for ix in 0..nxh {
+                let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]][c];
+                rows[0][ix] = times_ik(k, src[r * nxh + ix]);
+            }
+        });
+        self.transform.inverse(&self.g_hat, &mut self.work);
+    }
+
     /// With `h` the spectral field in `tmp_hat`: `out[c] := -ψ ∂_c h`, or with `use_phi`
     /// `out[c] -= φ ∂_c h` (spectral derivatives).
     fn gradient_product(&mut self, out: &mut [&mut [f64]], use_phi: bool) {
         let g = self.grid;
-        let nxh = g.nxh();
         for (c, o) in out.iter_mut().enumerate().take(g.dims) {
-            {
-                let w = &self.waves;
-                let src = &self.tmp_hat;
-                let mut fields = [&mut self.g_hat[..]];
-                for_each_row(&mut fields, nxh, |r, rows| {
-                    let (iy, iz) = row_indices(g, r);
-                    for ix in 0..nxh {
-                        let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]][c];
-                        rows[0][ix] = times_ik(k, src[r * nxh + ix]);
-                    }
-                });
-            }
-            self.transform.inverse(&self.g_hat, &mut self.work);
+            self.derivative_into_work(c, false);
             let weight = if use_phi { &self.phi } else { &self.psi };
             let work = &self.work;
             o.par_iter_mut()

@@ -44,6 +44,12 @@ impl Grid {
         self.nx / 2 + 1
     }
 
+    /// `(y index, z index)` of row `r` (real or spectral; rows run over y, then z).
+    #[inline]
+    pub fn row_yz(&self, r: usize) -> (usize, usize) {
+        (r % self.ny, r / self.ny)
+    }
+
     /// Number of stored Fourier modes, `nxh * ny * nz`.
     pub fn modes(&self) -> usize {
         self.nxh() * self.ny * self.nz

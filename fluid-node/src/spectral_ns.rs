@@ -51,12 +51,6 @@ fn slices<T>(v: &mut [Vec<T>]) -> [&mut [T]; 3] {
     std::array::from_fn(|_| it.next().map_or(&mut [][..], |x| &mut x[..]))
 }
 
-/// `(ky index, kz index)` of spectral row `r`.
-#[inline]
-fn row_indices(g: Grid, r: usize) -> (usize, usize) {
-    (r % g.ny, r / g.ny)
-}
-
 impl SpectralNs {
     /// A fluid at rest on `grid` with kinematic viscosity `nu`, time step `dt` and body force
     /// density over density `body_accel` (z ignored in 2D). Allocates every buffer and plan.
@@ -155,7 +149,7 @@ impl SpectralNs {
         let d = g.dims;
         let mut fields = slices(&mut self.u_hat);
         for_each_row(&mut fields[..d], g.nxh(), |r, rows| {
-            let (iy, iz) = row_indices(g, r);
+            let (iy, iz) = g.row_yz(r);
             for ix in 0..g.nxh() {
                 let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]];
                 let mut v = [Complex64::default(); 3];
@@ -212,7 +206,7 @@ impl SpectralNs {
                     &mut pair[..]
                 };
                 for_each_row(fields, nxh, |r, rows| {
-                    let (iy, iz) = row_indices(g, r);
+                    let (iy, iz) = g.row_yz(r);
                     let p_row = &p_hat[r * nxh..(r + 1) * nxh];
                     for ix in 0..nxh {
                         let p = p_row[ix];
@@ -244,7 +238,7 @@ impl SpectralNs {
             std::array::from_fn(|c| dt * self.body_accel[c] * g.cells() as f64);
         let mut fields = slices(&mut self.u_hat);
         for_each_row(&mut fields[..d], nxh, |r, rows| {
-            let (iy, iz) = row_indices(g, r);
+            let (iy, iz) = g.row_yz(r);
             let eyz = decay[1][iy] * decay[2][iz];
             let keep_yz = w.y.keep[iy] && w.z.keep[iz];
             for ix in 0..nxh {
@@ -289,7 +283,7 @@ impl SpectralNs {
         let nxh = g.nxh();
         let mut fields = slices(&mut self.u_hat);
         for_each_row(&mut fields[..d], nxh, |r, rows| {
-            let (iy, iz) = row_indices(g, r);
+            let (iy, iz) = g.row_yz(r);
             for ix in 0..nxh {
                 let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]];
                 let mut v = [Complex64::default(); 3];
@@ -363,7 +357,7 @@ impl SpectralNs {
         let uh = &self.u_hat;
         let mut fields = [&mut self.tmp_hat[..]];
         for_each_row(&mut fields, nxh, |r, rows| {
-            let (iy, iz) = row_indices(g, r);
+            let (iy, iz) = g.row_yz(r);
             for ix in 0..nxh {
                 let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]];
                 let mut s = Complex64::default();

@@ -1,5 +1,5 @@
 //! The discrete free energy (L2020 eqs. 27–30): total by term and density per node.
-use super::{row_indices, times_ik, CahnHilliard, CahnHilliardError};
+use super::{CahnHilliard, CahnHilliardError};
 use crate::parallel::{for_each_row, ordered_sum, per_row, GRAIN};
 use rayon::prelude::*;
 
@@ -26,7 +26,7 @@ impl CahnHilliard {
             let ph = &self.psi_hat;
             let mut fields = [&mut self.tmp_hat[..]];
             for_each_row(&mut fields, nxh, |r, rows| {
-                let (iy, iz) = row_indices(g, r);
+                let (iy, iz) = g.row_yz(r);
                 let k2yz = w.y.k2[iy] + w.z.k2[iz];
                 for ix in 0..nxh {
                     rows[0][ix] = ph[r * nxh + ix] * (w.x.k2[ix] + k2yz);
@@ -70,7 +70,6 @@ impl CahnHilliard {
     pub fn free_energy_density(&mut self, out: &mut [f64]) -> Result<(), CahnHilliardError> {
         self.check_len("energy density", out.len())?;
         let g = self.grid;
-        let nxh = g.nxh();
         let (e0, xi2) = (self.cfg.e0, self.cfg.xi * self.cfg.xi);
         {
             let (psi, phi, ps) = (&self.psi, &self.phi, &self.psi_star);
@@ -85,19 +84,7 @@ impl CahnHilliard {
                 });
         }
         for c in 0..g.dims {
-            {
-                let w = &self.waves;
-                let src = &self.psi_hat;
-                let mut fields = [&mut self.g_hat[..]];
-                for_each_row(&mut fields, nxh, |r, rows| {
-                    let (iy, iz) = row_indices(g, r);
-                    for ix in 0..nxh {
-                        let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]][c];
-                        rows[0][ix] = times_ik(k, src[r * nxh + ix]);
-                    }
-                });
-            }
-            self.transform.inverse(&self.g_hat, &mut self.work);
+            self.derivative_into_work(c, true);
             let work = &self.work;
             out.par_iter_mut()
                 .zip(work.par_iter())

@@ -21,8 +21,7 @@
 //! the same angle measured through fluid B: `θ_L2020 = 180° - θ_A`. A bead with ψ0 > 0 is
 //! wetted by A (σ_AS < σ_BS, θ_A < 90°), as L2020 section 2.4 states.
 use super::{
-    psi_star, row_indices, sigma_ab, CahnHilliard, CahnHilliardConfig, CahnHilliardError, Fluid,
-    Relaxation,
+    psi_star, sigma_ab, CahnHilliard, CahnHilliardConfig, CahnHilliardError, Fluid, Relaxation,
 };
 use crate::grid::Grid;
 use crate::parallel::for_each_row;
@@ -201,7 +200,7 @@ impl CahnHilliard {
             let gh = &self.g_hat;
             let mut fields = [&mut self.psi_hat[..]];
             for_each_row(&mut fields, nxh, |r, rows| {
-                let (iy, iz) = row_indices(g, r);
+                let (iy, iz) = g.row_yz(r);
                 let k2yz = w.y.k2[iy] + w.z.k2[iz];
                 for ix in 0..nxh {
                     let k2 = w.x.k2[ix] + k2yz;
