@@ -53,6 +53,8 @@ pub struct FibreInfo {
     pub spacing: f64,
     /// Young's modulus if given (for the derived k0 / (eta gamma)).
     pub youngs_modulus: Option<f64>,
+    /// Bead-spring k_b if given (for the derived bending number K of S2023 eq. 18).
+    pub bending_stiffness: Option<f64>,
 }
 
 impl FibreInfo {
@@ -303,7 +305,20 @@ pub fn parse_scene(scene_toml: &str) -> Result<FluidConfig, String> {
         }
     };
 
-    let fibres = parse_fibres(&table, dimensions, &grid, xi_cutoff)?;
+    let fibres = read_fibres(&table)?;
+    for (n, f) in fibres.iter().enumerate() {
+        // A bead's cut-off box must not wrap onto itself in the periodic grid.
+        let reach = f.bead_radius + xi_cutoff;
+        let need = ((2.0 * reach).floor() as usize).saturating_add(2);
+        let smallest = grid[..dimensions].iter().copied().min().unwrap_or(0);
+        if smallest < need {
+            return Err(format!(
+                "fibre.{n}.bead_radius: {} plus fluid.xi_cutoff {xi_cutoff} needs a grid \
+                 of at least {need} nodes along every axis, fluid.grid has {smallest}",
+                f.bead_radius
+            ));
+        }
+    }
 
     Ok(FluidConfig {
         dimensions,
@@ -320,14 +335,9 @@ pub fn parse_scene(scene_toml: &str) -> Result<FluidConfig, String> {
     })
 }
 
-/// `beads`, `bead_radius` (and `spacing`, `youngs_modulus` if they are numbers) of each
-/// `[[fibre]]` table; the fibre node checks the rest.
-fn parse_fibres(
-    table: &toml::Table,
-    dims: usize,
-    grid: &[usize; 3],
-    xi_cutoff: f64,
-) -> Result<Vec<FibreInfo>, String> {
+/// `beads`, `bead_radius` (and `spacing`, `youngs_modulus`, `bending_stiffness` if they are
+/// numbers) of each `[[fibre]]` table; the fibre node checks the rest.
+pub fn read_fibres(table: &toml::Table) -> Result<Vec<FibreInfo>, String> {
     let list = match table.get("fibre") {
         None => return Ok(Vec::new()),
         Some(toml::Value::Array(a)) => a,
@@ -373,16 +383,6 @@ fn parse_fibres(
                 }
             },
         };
-        // A bead's cut-off box must not wrap onto itself in the periodic grid.
-        let reach = bead_radius + xi_cutoff;
-        let need = ((2.0 * reach).floor() as usize).saturating_add(2);
-        let smallest = grid[..dims].iter().copied().min().unwrap_or(0);
-        if smallest < need {
-            return Err(format!(
-                "{p}.bead_radius: {bead_radius} plus fluid.xi_cutoff {xi_cutoff} needs a grid \
-                 of at least {need} nodes along every axis, fluid.grid has {smallest}"
-            ));
-        }
         let spacing = t
             .get("spacing")
             .and_then(number)
@@ -392,11 +392,13 @@ fn parse_fibres(
             .get("youngs_modulus")
             .and_then(number)
             .filter(|e| e.is_finite() && *e > 0.0);
+        let bending_stiffness = t.get("bending_stiffness").and_then(number);
         out.push(FibreInfo {
             beads: beads as usize,
             bead_radius,
             spacing,
             youngs_modulus,
+            bending_stiffness,
         });
     }
     Ok(out)

@@ -67,17 +67,14 @@ pub struct FpdScene {
     pub bending_stiffness: Vec<Option<f64>>,
 }
 
-fn err(msg: impl Into<String>) -> String {
-    msg.into()
-}
-
 /// Read and check the FPD part of a scene.
 pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
     let table = scene_keys::parse_table(scene_toml)?;
     if scene_keys::dimensions(&table)? != 2 {
-        return Err(err(
-            "dimensions: fluid.method = \"fpd-lbm\" is the 2D D2Q9 lattice of S2023; set dimensions = 2",
-        ));
+        return Err(
+            "dimensions: fluid.method = \"fpd-lbm\" is the 2D D2Q9 lattice of S2023; set dimensions = 2"
+                .into(),
+        );
     }
     let dt = scene_keys::time_step(&table)?;
     if dt != 1.0 {
@@ -136,35 +133,24 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
         }
     };
     if couette_start && walls.is_none() {
-        return Err(err(
-            "fluid.initial_velocity = \"couette\" needs walls.velocity",
-        ));
+        return Err("fluid.initial_velocity = \"couette\" needs walls.velocity".into());
     }
 
-    let mut beads = Vec::new();
-    let mut bending_stiffness = Vec::new();
-    let mut radius: Option<f64> = None;
-    if let Some(toml::Value::Array(list)) = table.get("fibre") {
-        for (n, f) in list.iter().enumerate() {
-            let get = |k: &str| {
-                f.get(k)
-                    .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-            };
-            let b = f.get("beads").and_then(|v| v.as_integer()).unwrap_or(0);
-            let r = get("bead_radius").ok_or(format!("fibre.{n}.bead_radius: required"))?;
-            match radius {
-                Some(r0) if r0 != r => {
-                    return Err(format!(
-                        "fibre.{n}.bead_radius = {r}: under fluid.method = \"fpd-lbm\" all beads \
-                         share one radius (fibre.0 has {r0})"
-                    ))
-                }
-                _ => radius = Some(r),
-            }
-            beads.push(b.max(0) as usize);
-            bending_stiffness.push(get("bending_stiffness"));
-        }
+    let fibres = crate::config::read_fibres(&table)?;
+    if let Some((n, f)) = fibres
+        .iter()
+        .enumerate()
+        .find(|(_, f)| f.bead_radius != fibres[0].bead_radius)
+    {
+        return Err(format!(
+            "fibre.{n}.bead_radius = {}: under fluid.method = \"fpd-lbm\" all beads share one \
+             radius (fibre.0 has {})",
+            f.bead_radius, fibres[0].bead_radius
+        ));
     }
+    let radius = fibres.first().map(|f| f.bead_radius);
+    let beads = fibres.iter().map(|f| f.beads).collect();
+    let bending_stiffness = fibres.iter().map(|f| f.bending_stiffness).collect();
     let mut coupling = FpdConfig::new(radius.unwrap_or(1.0), viscosity / density);
     if let Some(r) = raw.viscosity_ratio {
         coupling.viscosity_ratio = r;
