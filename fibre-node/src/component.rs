@@ -206,7 +206,7 @@ impl Component for FibreComponent {
                 param("fibre.N.stretch_stiffness", "mass length^2 / time^2", Some("E pi r^2 l0"), "bead-spring k_s (spring stiffness k_s / l0^2)"),
                 param("fibre.N.bending_stiffness", "mass length^2 / time^2", Some("E I / l0"), "bead-spring k_b (U_b = -k_b sum t_i+1 . t_i)"),
                 param("fibre.N.affinity", "1", Some("0.0"), "wetting affinity psi0 of the fibre (read by the fluid node)"),
-                param("fibre.N.bending_number", "1", Some("none"), "bending number K (S2023 eq. 18; recorded, not used by the fibre node)"),
+                param("fibre.N.bending_number", "1", Some("none"), "bead-spring under fpd-lbm: bending number K = 2 k_b / (eta_f gamma l_c^2) (S2023 eq. 18), converted to k_b with fluid.viscosity, the wall shear gamma = (top - bottom) / ny and l_c = N d; excludes bending_stiffness"),
                 param("fibre.N.beam_forces", "1", Some("\"paper\""), "cohesive beam: \"paper\" (L2020 eqs. 11-24) or \"energy-consistent\" (the same to leading order, exactly conservative to third order in the bead angles)"),
             ],
             inputs: vec![

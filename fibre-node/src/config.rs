@@ -247,6 +247,18 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         fibres.push(validate_fibre(&prefix, raw, dimensions)?);
     }
 
+    for (n, f) in fibres.iter_mut().enumerate() {
+        if let Some(k) = f.bending_number {
+            f.bending_stiffness = Some(bending_stiffness_from_number(
+                &table,
+                &format!("fibre.{n}"),
+                f,
+                k,
+                coupling,
+            )?);
+        }
+    }
+
     Ok(SceneConfig {
         dimensions,
         dt,
@@ -254,6 +266,77 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         coupling,
         fibres,
     })
+}
+
+/// `k_b` from S2023's bending number (eq. 18), `K = 2 k_b / (eta_f gamma l_c^2)`, with the
+/// scene's FPD shear: `gamma = (top - bottom) / H` for walls at `y = -1/2` and `ny - 1/2`
+/// (`H = ny`, `fluid.method = "fpd-lbm"`), `eta_f = fluid.viscosity` and `l_c = N d`. The
+/// fluid node validates these keys itself; here they are only read, and a missing or odd one
+/// is named.
+fn bending_stiffness_from_number(
+    table: &toml::Table,
+    p: &str,
+    f: &FibreConfig,
+    k: f64,
+    coupling: Coupling,
+) -> Result<f64, String> {
+    if f.model != ModelKind::BeadSpring {
+        return Err(format!(
+            "{p}.bending_number: only the bead-spring model reads this key (model is {:?})",
+            f.model.name()
+        ));
+    }
+    if f.bending_stiffness.is_some() {
+        return Err(format!(
+            "{p}.bending_number: give either bending_number (K, S2023 eq. 18) or \
+             bending_stiffness (k_b), not both"
+        ));
+    }
+    if coupling != Coupling::Fpd {
+        return Err(format!(
+            "{p}.bending_number: K is converted to k_b with the FPD shear rate and viscosity, \
+             so it needs fluid.method = \"fpd-lbm\"; give {p}.bending_stiffness instead"
+        ));
+    }
+    if !(k.is_finite() && k > 0.0) {
+        return Err(format!(
+            "{p}.bending_number: expected a positive number, got {k}"
+        ));
+    }
+    let num = |v: &toml::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+    let fluid = table.get("fluid").and_then(|f| f.as_table());
+    let ny = fluid
+        .and_then(|f| f.get("grid"))
+        .and_then(|g| g.as_array())
+        .and_then(|g| g.get(1))
+        .and_then(num)
+        .filter(|h| *h > 0.0)
+        .ok_or(format!(
+            "{p}.bending_number needs fluid.grid = [nx, ny] (the gap H = ny)"
+        ))?;
+    let eta = fluid
+        .and_then(|f| f.get("viscosity"))
+        .and_then(num)
+        .filter(|e| *e > 0.0)
+        .ok_or(format!(
+            "{p}.bending_number needs a positive fluid.viscosity (eta_f)"
+        ))?;
+    let walls = table
+        .get("walls")
+        .and_then(|w| w.get("velocity"))
+        .and_then(|v| v.as_array())
+        .map(|v| v.iter().filter_map(num).collect::<Vec<_>>());
+    let gamma = match walls.as_deref() {
+        Some([b, t]) if t != b => (t - b).abs() / ny,
+        _ => {
+            return Err(format!(
+                "{p}.bending_number needs a shear: walls.velocity = [bottom, top] with \
+                 different speeds"
+            ))
+        }
+    };
+    let lc = f.beads as f64 * 2.0 * f.bead_radius;
+    Ok(0.5 * k * eta * gamma * lc * lc)
 }
 
 fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, String> {
@@ -473,7 +556,6 @@ loads = [{ bead = -1, force = [0, -1, 0] }, { bead = 3, torque = [0, 0, 0.5] }]
 damping = 0.1
 substeps = 4
 affinity = 0.2
-bending_number = 3.0
 [fluid]
 method = "spm"
 "#,
@@ -486,7 +568,65 @@ method = "spm"
         assert_eq!(f.loads[0].bead, 9);
         assert_eq!(f.loads[1].torque, [0.0, 0.0, 0.5]);
         assert_eq!(f.substeps, 4);
-        assert_eq!(f.bending_number, Some(3.0));
+        assert_eq!(f.affinity, 0.2);
+    }
+
+    const FPD_SHEAR: &str = r#"dimensions = 2
+[time]
+dt = 1.0
+[fluid]
+method = "fpd-lbm"
+grid = [200, 160]
+viscosity = 0.5
+[walls]
+velocity = [-0.04, 0.04]
+[[fibre]]
+model = "bead-spring"
+beads = 10
+bead_radius = 4.0
+youngs_modulus = 1.0
+"#;
+
+    /// S2023 eq. 18 inverted: k_b = K eta_f gamma l_c^2 / 2 with gamma = 0.08 / 160,
+    /// l_c = 10 x 8 = 80: K = 3.3 gives k_b = 3.3 x 0.5 x 5e-4 x 6400 / 2 = 2.64.
+    #[test]
+    fn bending_number_sets_the_bending_stiffness_from_the_fpd_shear() {
+        let s = parse_scene(&format!("{FPD_SHEAR}bending_number = 3.3\n")).unwrap();
+        let f = &s.fibres[0];
+        assert_eq!(f.bending_number, Some(3.3));
+        let kb = f.bending_stiffness.unwrap();
+        assert!((kb - 2.64).abs() < 1e-12, "{kb}");
+    }
+
+    #[test]
+    fn bending_number_refusals_say_why() {
+        let cases: &[(String, &str)] = &[
+            (
+                format!("{FPD_SHEAR}bending_number = 3.3\nbending_stiffness = 1.0\n"),
+                "give either bending_number",
+            ),
+            (
+                format!("{FPD_SHEAR}bending_number = -1.0\n"),
+                "expected a positive number",
+            ),
+            (
+                FPD_SHEAR.replace("velocity = [-0.04, 0.04]", "velocity = [0.0, 0.0]")
+                    + "bending_number = 3.3\n",
+                "needs a shear",
+            ),
+            (
+                FPD_SHEAR.replace("\"fpd-lbm\"", "\"spm\"") + "bending_number = 3.3\n",
+                "needs fluid.method = \"fpd-lbm\"",
+            ),
+            (
+                with("bending_number = 3.3\n[fluid]\nmethod = \"fpd-lbm\""),
+                "only the bead-spring model",
+            ),
+        ];
+        for (scene, expected) in cases {
+            let e = err(scene);
+            assert!(e.contains(expected), "{e}\n(expected `{expected}`)");
+        }
     }
 
     #[test]
