@@ -111,3 +111,74 @@ fn fpd_refuses_what_it_cannot_carry() {
     .unwrap_err();
     assert!(e.contains("Mach number"), "{e}");
 }
+
+/// `fibre.N.bending_number` (S2023 eq. 18) sets k_b in the fibre node; the fluid node,
+/// given that k_b instead, derives the same K from its own shear rate and viscosity.
+#[test]
+fn bending_number_round_trips_through_both_nodes() {
+    let cfg = config("fpd/jeffery_rigid.toml");
+    let steps = vec![
+        "time.steps=1".to_string(),
+        "analysis.metrics=[]".to_string(),
+    ];
+    let a = run_in_process(&cfg, &steps, "fpd-bending-number");
+    let kb = a["derived"]["fibre.0.bending_stiffness"].as_f64().unwrap();
+    // l_c = 10 x 4, gamma = 0.1 / 200, eta_f = 0.5: k_b = 3.3 x 0.5 x 5e-4 x 1600 / 2.
+    assert!((kb - 0.66).abs() < 1e-12, "k_b = {kb}");
+    let text = std::fs::read_to_string(&cfg).unwrap();
+    assert!(text.contains("\nbending_number = 3.3\n"));
+    let dir = out_dir("fpd-bending-stiffness-scene");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        text.replace(
+            "\nbending_number = 3.3\n",
+            &format!("\nbending_stiffness = {kb:?}\n"),
+        ),
+    )
+    .unwrap();
+    let b = run_in_process(&scene, &steps, "fpd-bending-stiffness");
+    let k = b["derived"]["fluid.bending_number"].as_f64().unwrap();
+    assert!((k - 3.3).abs() < 1e-12, "K = {k}");
+}
+
+/// S2023's Couette sandwich (Fig. 2, eqs. 13-14): the lattice's largest deviation from the
+/// sharp profile of eq. 13 equals, within 2e-3 of the wall-speed difference, that of the
+/// continuum diffuse-viscosity problem (steady Couette: du/dz = sigma / eta(z), integrated by
+/// the midpoint rule on 2e5 cells). The deviation itself is a property of the diffuse
+/// profile: 5 % at r_eta = 100, xi / H = 0.01 (docs/validation/fpd.md).
+#[test]
+fn couette_sandwich_matches_the_diffuse_viscosity_solution() {
+    let cfg = config("fpd/couette_sandwich.toml");
+    let s = run_in_process(&cfg, &[], "fpd-couette-sandwich");
+    let lattice = s["metrics"]["couette_max_error"]["value"].as_f64().unwrap();
+    let (h, r, xi) = (200.0_f64, 100.0, 2.0);
+    let (zl, zr) = (h / 3.0, h - h / 3.0);
+    let phi = |z: f64| {
+        if z <= 0.5 * h {
+            0.5 * (((zl - z) / xi).tanh() + 1.0)
+        } else {
+            0.5 * (((z - zr) / xi).tanh() + 1.0)
+        }
+    };
+    let n = 200_000;
+    let dz = h / n as f64;
+    let inv: Vec<f64> = (0..n)
+        .map(|i| 1.0 / (1.0 + (r - 1.0) * phi((i as f64 + 0.5) * dz)))
+        .collect();
+    let total: f64 = inv.iter().sum();
+    let (mut acc, mut continuum) = (0.0, 0.0_f64);
+    for (i, v) in inv.iter().enumerate() {
+        acc += v;
+        let z = (i as f64 + 0.5) * dz;
+        let u = acc / total; // 0 .. 1 across the gap
+        let exact = ((z - zl) / (zr - zl)).clamp(0.0, 1.0);
+        continuum = continuum.max((u - exact).abs());
+    }
+    println!("sandwich: lattice {lattice:.5}, continuum {continuum:.5}");
+    assert!(
+        (lattice - continuum).abs() < 2e-3,
+        "lattice {lattice} vs continuum {continuum}"
+    );
+}

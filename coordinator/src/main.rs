@@ -185,7 +185,12 @@ fn print_result(summary: &serde_json::Value, out: &std::path::Path) {
                     v["value"].as_f64().unwrap_or(f64::NAN),
                     100.0 * e
                 ),
-                _ => println!("  {name} = {}", v["value"]),
+                _ => match v["label"].as_str() {
+                    Some(label) => {
+                        println!("  {name} = {label} ({})", v["note"].as_str().unwrap_or(""))
+                    }
+                    None => println!("  {name} = {}", v["value"]),
+                },
             }
         }
     }

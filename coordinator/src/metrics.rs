@@ -14,10 +14,29 @@ pub const KNOWN: &[&str] = &[
     "drag_ratio",
     "tumbling_period_gamma",
     "min_end_to_end_over_length",
+    "orbit",
+    "half_turn_period_gamma",
+    "effective_aspect_ratio",
+    "stuck_angle_deg",
 ];
 
 /// Metrics that need fibre 0's orientation at every step.
-pub const NEED_TRAJECTORY: &[&str] = &["tumbling_period_gamma", "min_end_to_end_over_length"];
+pub const NEED_TRAJECTORY: &[&str] = &[
+    "tumbling_period_gamma",
+    "min_end_to_end_over_length",
+    "orbit",
+    "half_turn_period_gamma",
+    "effective_aspect_ratio",
+    "stuck_angle_deg",
+];
+
+/// The orbit metrics (S2023 section IV), computed together by [`crate::orbit`].
+const ORBIT_METRICS: &[&str] = &[
+    "orbit",
+    "half_turn_period_gamma",
+    "effective_aspect_ratio",
+    "stuck_angle_deg",
+];
 
 /// Everything a metric may look at, at the end of a run.
 pub struct Context<'a> {
@@ -47,6 +66,8 @@ fn plain(value: f64) -> Metric {
         relative_error: None,
         reference_source: String::new(),
         extra: BTreeMap::new(),
+        label: None,
+        note: String::new(),
     }
 }
 
@@ -64,10 +85,17 @@ pub struct Metric {
     /// Other numbers worth reporting next to it (e.g. small-deflection theory).
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub extra: BTreeMap<String, f64>,
+    /// A categorical result (the `orbit` class), next to its numeric code in `value`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
+    /// How the value was decided, in words.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub note: String,
 }
 
 impl Metric {
-    fn with_reference(value: f64, reference: f64, source: &str) -> Self {
+    /// A value with its reference and the relative error (absolute if the reference is 0).
+    pub fn with_reference(value: f64, reference: f64, source: &str) -> Self {
         let relative_error = if reference != 0.0 {
             ((value - reference) / reference).abs()
         } else {
@@ -79,6 +107,8 @@ impl Metric {
             relative_error: Some(relative_error),
             reference_source: source.to_string(),
             extra: BTreeMap::new(),
+            label: None,
+            note: String::new(),
         }
     }
 }
@@ -177,11 +207,31 @@ pub fn compute(
 ) -> Result<BTreeMap<String, Metric>, String> {
     let mut out = BTreeMap::new();
     let mut beam_names = Vec::new();
+    let orbit_names: Vec<&String> = names
+        .iter()
+        .filter(|n| ORBIT_METRICS.contains(&n.as_str()))
+        .collect();
+    if !orbit_names.is_empty() {
+        let mut all = orbit_metrics(ctx)?;
+        for n in orbit_names {
+            if let Some(m) = all.remove(n.as_str()) {
+                out.insert(n.clone(), m);
+            }
+        }
+    }
     for name in names {
+        if ORBIT_METRICS.contains(&name.as_str()) {
+            continue;
+        }
         let m = match name.as_str() {
-            "couette_max_error" => plain(
+            // Already an error relative to the wall-speed difference: its reference is 0, so
+            // that studies plot it against wall time like any other error.
+            "couette_max_error" => Metric::with_reference(
                 lookup(ctx.diagnostics, "couette_max_error")
                     .ok_or("metric `couette_max_error` needs walls and a fluid that reports it")?,
+                0.0,
+                "the exact Couette profile (linear; S2023 eq. 13 with solid layers), error over \
+                 the wall-speed difference",
             ),
             "drag_ratio" => drag_ratio(ctx)?,
             "tumbling_period_gamma" => {
@@ -223,6 +273,106 @@ pub fn compute(
         out.insert(name.clone(), m);
     }
     out.extend(beam_metrics(&beam_names, ctx, dimensionless)?);
+    Ok(out)
+}
+
+/// S2023's Jeffery fit for a rigid chain of 10 beads at C = 0.2, Re_ps << 1 (Fig. 5a).
+const S2023_RIGID_ASPECT_RATIO: f64 = 0.132;
+
+/// The orbit of fibre 0 in the wall shear (S2023 section IV, [`crate::orbit`]): all four
+/// orbit metrics at once, so that they rest on one analysis.
+fn orbit_metrics(ctx: &Context) -> Result<BTreeMap<&'static str, Metric>, String> {
+    let gamma = lookup(ctx.derived, "fluid.shear_rate")
+        .ok_or("the orbit metrics need walls (a shear rate)")?
+        .abs();
+    let n = *ctx
+        .beads_per_fibre
+        .first()
+        .ok_or("the orbit metrics need a fibre")?;
+    let a = crate::orbit::analyse_series(&ctx.trajectory.orientation_series(), n, gamma)
+        .map_err(|e| format!("orbit analysis of fibre 0: {e}"))?;
+    let scalars: BTreeMap<String, f64> = a
+        .scalars()
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect();
+    let mut out = BTreeMap::new();
+
+    // S2023's regimes (i)-(v): Jeffery, S-turn, S-coiled, Jeffery-stuck, S-stuck.
+    let regime = match (a.kind, a.stuck_kind) {
+        (crate::orbit::OrbitKind::Jeffery, _) => 1.0,
+        (crate::orbit::OrbitKind::STurn, _) => 2.0,
+        (crate::orbit::OrbitKind::SCoiled, _) => 3.0,
+        (_, Some("s-stuck")) => 5.0,
+        _ => 4.0,
+    };
+    let mut orbit = plain(regime);
+    orbit.label = Some(a.kind.as_str().to_string());
+    orbit.note = match a.stuck_kind {
+        Some(k) => format!("{k}: {}", a.reason),
+        None => a.reason.clone(),
+    };
+    orbit.extra = scalars.clone();
+    orbit.extra.insert("folds".into(), a.folds as f64);
+    orbit
+        .extra
+        .insert("straightenings".into(), a.straightenings as f64);
+    orbit.extra.insert("tail_rate_deg".into(), a.tail_rate_deg);
+    orbit
+        .extra
+        .insert("stuck_threshold_deg".into(), a.stuck_threshold_deg);
+    out.insert("orbit", orbit);
+
+    let mut period = plain(a.period_gamma.unwrap_or(f64::NAN));
+    if a.period_gamma.is_none() {
+        period.note = "fewer than two passes through 90 deg: no complete half-turn".into();
+    }
+    if let Some(r) = a.period_aspect_ratio {
+        period.extra.insert("period_aspect_ratio".into(), r);
+    }
+    period
+        .extra
+        .insert("half_turns".into(), a.half_turns.len() as f64);
+    out.insert("half_turn_period_gamma", period);
+
+    let mut fit = match &a.jeffery_fit {
+        Some(f) if n == 10 => Metric::with_reference(
+            f.effective_aspect_ratio,
+            S2023_RIGID_ASPECT_RATIO,
+            "S2023 Fig. 5a: rigid 10-bead fibre, C = 0.2, Re_ps << 1",
+        ),
+        Some(f) => plain(f.effective_aspect_ratio),
+        None => {
+            let mut m = plain(f64::NAN);
+            m.note =
+                "no Jeffery fit (stuck fibre, too few samples, or no aspect ratio fits)".into();
+            m
+        }
+    };
+    if let Some(f) = &a.jeffery_fit {
+        fit.extra.insert("rms_residual".into(), f.rms_residual);
+        fit.extra.insert("coefficient".into(), f.coefficient);
+        fit.extra
+            .insert("geometric_aspect_ratio".into(), 1.0 / n as f64);
+        if let Some(r) = f.free_aspect_ratio {
+            fit.extra.insert("free_aspect_ratio".into(), r);
+        }
+        if let Some(g) = f.free_shear_rate {
+            fit.extra
+                .insert("free_shear_rate_over_gamma".into(), g / gamma);
+        }
+    }
+    out.insert("effective_aspect_ratio", fit);
+
+    let mut stuck = plain(a.stuck_angle_deg.unwrap_or(f64::NAN));
+    stuck.note = match a.stuck_kind {
+        Some(k) => format!(
+            "{k}; S2023 Fig. 7b at C = 0.87: 6.0 deg (S-stuck, K = 0.33, Re_ps = 1.5), \
+             12.0 deg (Jeffery-stuck, K = 3.3, Re_ps = 6)"
+        ),
+        None => "not stuck".into(),
+    };
+    out.insert("stuck_angle_deg", stuck);
     Ok(out)
 }
 

@@ -6,6 +6,8 @@ pub struct Trajectory {
     pub times: Vec<f64>,
     pub angles: Vec<f64>,
     pub end_to_end: Vec<f64>,
+    /// Contour length: the polyline through fibre 0's bead centres.
+    pub contour: Vec<f64>,
 }
 
 impl Trajectory {
@@ -26,6 +28,30 @@ impl Trajectory {
         self.angles.push(angle);
         self.end_to_end
             .push((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt());
+        let contour = states[..beads]
+            .windows(2)
+            .map(|w| {
+                let (p, q) = (w[0].position, w[1].position);
+                ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2)).sqrt()
+            })
+            .sum();
+        self.contour.push(contour);
+    }
+
+    /// The history in the orbit analysis' terms: the unwrapped angle, and the end-to-end
+    /// distance over the contour length at the same sample (1 for a straight fibre whatever
+    /// its bonds' strain, S2023 section IV C).
+    pub fn orientation_series(&self) -> crate::orbit::OrientationSeries {
+        crate::orbit::OrientationSeries {
+            times: self.times.clone(),
+            theta: self.angles.clone(),
+            end_to_end_ratio: self
+                .end_to_end
+                .iter()
+                .zip(&self.contour)
+                .map(|(e, c)| e / c)
+                .collect(),
+        }
     }
 
     /// Times at which the fibre passes through the vertical (angle = pi/2 + k pi), by linear

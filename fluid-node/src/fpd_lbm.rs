@@ -39,6 +39,44 @@ struct RawFluid {
     interface_ratio: Option<f64>,
     profile_cutoff: Option<f64>,
     initial_velocity: Option<String>,
+    solid_layers: Option<RawLayers>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLayers {
+    thickness: f64,
+    interface: f64,
+}
+
+/// S2023's Couette sandwich (section III A, Fig. 2, eq. 14): a layer of the solid viscosity
+/// on each wall, moving with it, with tanh interfaces.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolidLayers {
+    /// Layer thickness z_L measured from the wall plane (lattice units); the fluid lies in
+    /// z_L < z < H - z_L (S2023: z_L = H / 3).
+    pub thickness: f64,
+    /// Interface length xi of eq. 14 (lattice units).
+    pub interface: f64,
+}
+
+impl SolidLayers {
+    /// Eq. 14 at distance z = y + 1/2 from the bottom wall plane of a gap H.
+    pub fn phi(&self, z: f64, h: f64) -> f64 {
+        let (zl, zr, xi) = (self.thickness, h - self.thickness, self.interface);
+        if z <= 0.5 * h {
+            0.5 * (((zl - z) / xi).tanh() + 1.0)
+        } else {
+            0.5 * (((z - zr) / xi).tanh() + 1.0)
+        }
+    }
+
+    /// Eq. 13 for walls moving at `b` and `t`: each layer moves with its wall, the fluid
+    /// between the interfaces is sheared linearly.
+    pub fn exact(&self, z: f64, h: f64, b: f64, t: f64) -> f64 {
+        let (zl, zr) = (self.thickness, h - self.thickness);
+        b + (t - b) * ((z - zl) / (zr - zl)).clamp(0.0, 1.0)
+    }
 }
 
 #[derive(Deserialize)]
@@ -65,6 +103,8 @@ pub struct FpdScene {
     pub beads: Vec<usize>,
     /// `fibre.N.bending_stiffness` of each fibre, where given (for the bending number K).
     pub bending_stiffness: Vec<Option<f64>>,
+    /// `[fluid.solid_layers]`: S2023's Couette sandwich (scenes without fibres).
+    pub solid_layers: Option<SolidLayers>,
 }
 
 /// Read and check the FPD part of a scene.
@@ -149,7 +189,7 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
         ));
     }
     let radius = fibres.first().map(|f| f.bead_radius);
-    let beads = fibres.iter().map(|f| f.beads).collect();
+    let beads: Vec<usize> = fibres.iter().map(|f| f.beads).collect();
     let bending_stiffness = fibres.iter().map(|f| f.bending_stiffness).collect();
     let mut coupling = FpdConfig::new(radius.unwrap_or(1.0), viscosity / density);
     if let Some(r) = raw.viscosity_ratio {
@@ -161,6 +201,36 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
     if let Some(c) = raw.profile_cutoff {
         coupling.cutoff = c;
     }
+    let solid_layers = match raw.solid_layers {
+        None => None,
+        Some(l) => {
+            let thickness = scene_keys::positive("fluid.solid_layers.thickness", l.thickness)?;
+            let interface = scene_keys::positive("fluid.solid_layers.interface", l.interface)?;
+            if walls.is_none() {
+                return Err("fluid.solid_layers: the layers move with the walls; set \
+                            walls.velocity"
+                    .into());
+            }
+            if 2.0 * thickness >= ny as f64 {
+                return Err(format!(
+                    "fluid.solid_layers.thickness = {thickness}: two layers must leave fluid \
+                     between them (gap ny = {ny})"
+                ));
+            }
+            if beads.iter().any(|&n| n > 0) {
+                return Err(
+                    "fluid.solid_layers: the sandwich of S2023 Fig. 2 is a scene \
+                            without fibres (the bead profiles would overwrite the layers' \
+                            viscosity); remove the [[fibre]] tables"
+                        .into(),
+                );
+            }
+            Some(SolidLayers {
+                thickness,
+                interface,
+            })
+        }
+    };
     Ok(FpdScene {
         nx,
         ny,
@@ -171,6 +241,7 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
         coupling,
         beads,
         bending_stiffness,
+        solid_layers,
     })
 }
 
@@ -203,11 +274,28 @@ impl FpdRun {
         mc.density = scene.density;
         let mut lattice =
             MrtD2q9::new(mc).map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?;
+        if let Some(layers) = scene.solid_layers {
+            let (nx, h) = (scene.nx, scene.ny as f64);
+            let phi: Vec<f64> = (0..scene.nx * scene.ny)
+                .map(|k| layers.phi((k / nx) as f64 + 0.5, h))
+                .collect();
+            lattice
+                .set_viscosity_from_fraction(&phi, nu, nu * scene.coupling.viscosity_ratio)
+                .map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?;
+        }
         if scene.couette_start {
             let [b, t] = scene.walls.unwrap_or([0.0; 2]);
             let ny = scene.ny as f64;
+            let layers = scene.solid_layers;
             lattice
-                .initialize_with(|_, y| (scene.density, b + (t - b) * (y as f64 + 0.5) / ny, 0.0))
+                .initialize_with(|_, y| {
+                    let z = y as f64 + 0.5;
+                    let u = match layers {
+                        Some(l) => l.exact(z, ny, b, t),
+                        None => b + (t - b) * z / ny,
+                    };
+                    (scene.density, u, 0.0)
+                })
                 .map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?;
         }
         let total_beads: usize = scene.beads.iter().sum();
@@ -242,6 +330,13 @@ impl FpdRun {
             let gamma = (t - b) / h;
             derived.push(("fluid.gap".into(), h));
             derived.push(("fluid.shear_rate".into(), gamma));
+            if let Some(l) = scene.solid_layers {
+                // S2023 section III A: r_xi = xi / H for the sandwich.
+                derived.push((
+                    "fluid.solid_layers.interface_over_gap".into(),
+                    l.interface / h,
+                ));
+            }
             if let Some(&n) = scene.beads.first() {
                 // S2023 eq. 18: l_c = N d, C = l_c / H, Re_ps = rho gamma l_c^2 / (4 eta_f),
                 // K = 2 k_b / (eta_f gamma l_c^2).
@@ -355,8 +450,8 @@ impl FpdRun {
         Ok(PhaseReport { diagnostics })
     }
 
-    /// Largest deviation of the row-averaged x-velocity from the linear Couette profile
-    /// between the wall planes, over |top - bottom|.
+    /// Largest deviation of the row-averaged x-velocity from the Couette profile between the
+    /// wall planes (linear, or S2023 eq. 13 with solid layers), over |top - bottom|.
     fn couette_error(&mut self, b: f64, t: f64) -> f64 {
         self.lattice.velocity(&mut self.ux, &mut self.uy);
         let (nx, ny) = (self.scene.nx, self.scene.ny);
@@ -367,7 +462,11 @@ impl FpdRun {
         let mut worst: f64 = 0.0;
         for y in 0..ny {
             let mean = self.ux[y * nx..(y + 1) * nx].iter().sum::<f64>() / nx as f64;
-            let exact = b + (t - b) * (y as f64 + 0.5) / ny as f64;
+            let z = y as f64 + 0.5;
+            let exact = match self.scene.solid_layers {
+                Some(l) => l.exact(z, ny as f64, b, t),
+                None => b + (t - b) * z / ny as f64,
+            };
             worst = worst.max((mean - exact).abs() / du);
         }
         worst
