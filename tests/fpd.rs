@@ -182,3 +182,51 @@ fn couette_sandwich_matches_the_diffuse_viscosity_solution() {
         "lattice {lattice} vs continuum {continuum}"
     );
 }
+
+/// The hard case, all at once: r_eta = 1000, Re_ps = 10 (eta_f = 0.025, tau = 0.575)
+/// and C = 0.9 (l_c = 40 in a gap of 44). It runs 20 000 steps bounded: no NaN (the run
+/// would stop), beads inside the gap, bonds within 5 % of their rest length, Mach number far
+/// below the lattice's limit.
+#[test]
+fn fpd_hard_case_stays_bounded() {
+    let name = "fpd-hard-case";
+    let o: Vec<String> = [
+        "fluid.viscosity_ratio=1000.0",
+        "fluid.viscosity=0.025",
+        "fluid.grid=[96,44]",
+        "walls.velocity=[-0.01375,0.01375]",
+        "fibre.0.start=[48.0,5.5,0.0]",
+        "analysis.metrics=[\"orbit\"]",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let s = run_in_process(&config("fpd/fibre_in_shear.toml"), &o, name);
+    let d = &s["derived"];
+    assert!((d["fluid.particle_shear_reynolds"].as_f64().unwrap() - 10.0).abs() < 1e-9);
+    assert!((d["fluid.confinement"].as_f64().unwrap() - 40.0 / 44.0).abs() < 1e-12);
+    assert_eq!(s["status"], "completed");
+    let mach = s["final_diagnostics"]["max_mach"].as_f64().unwrap();
+    assert!(mach < 0.1, "max Mach {mach}");
+    let dir = root()
+        .join("target")
+        .join("test-runs")
+        .join(format!("{name}-{}", std::process::id()));
+    let states = read_topic(&dir.join("run.mcap"), "/fibre/bead_states").unwrap();
+    let last = states.last().unwrap()["states"].as_array().unwrap();
+    let p: Vec<[f64; 2]> = last
+        .iter()
+        .map(|b| [b[0].as_f64().unwrap(), b[1].as_f64().unwrap()])
+        .collect();
+    for (i, q) in p.iter().enumerate() {
+        assert!(
+            q[0].is_finite() && q[1] > -0.5 && q[1] < 43.5,
+            "bead {i} at {q:?}"
+        );
+    }
+    for w in p.windows(2) {
+        let l = (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+        assert!((l - 8.0).abs() < 0.4, "bond length {l}");
+    }
+    println!("hard case: orbit {}", s["metrics"]["orbit"]["label"]);
+}
