@@ -424,21 +424,30 @@ fn driven_bead_drag_gives_the_hydrodynamic_radius() {
 /// 48 x 40 nodes, a = 4, shear rate 2U/H = 1e-4, Re_p = gamma d^2 / nu ~ 0.04): S2023 eq. 15
 /// measured relative to the bead's rigid motion (its velocity and angular velocity from
 /// `rigid_motion`, since a free cylinder in shear rotates), normalised by (gamma a)^2. It
-/// must decrease as r_eta grows (S2023 section III B: the FPD bead tends to a rigid body as
-/// r_eta -> infinity); the rotation rate is reported against -gamma / 2, the unbounded
-/// Stokes value (confinement d/H = 0.2 lowers it slightly).
+/// must decrease as r_eta grows and as r_xi = xi / d shrinks (S2023 section III B, Fig. 3d,e:
+/// the FPD bead tends to a rigid body as r_eta -> infinity and r_xi -> 0); the rotation rate
+/// is reported against -gamma / 2, the unbounded Stokes value (confinement d/H = 0.2 lowers
+/// it slightly).
 #[test]
 fn internal_flow_of_a_cylinder_in_shear_decreases_with_viscosity_ratio() {
     let (nx, ny, a, nu) = (48, 40, 4.0, 1.0 / 6.0);
     let u = 2e-3;
     let gamma = 2.0 * u / ny as f64;
     let mut results = Vec::new();
-    for r_eta in [10.0, 100.0, 1000.0] {
+    let cases = [
+        (10.0, 0.125),
+        (100.0, 0.125),
+        (1000.0, 0.125),
+        (100.0, 0.25),
+        (100.0, 0.0625),
+    ];
+    for (r_eta, r_xi) in cases {
         let mut lat = channel(nx, ny, nu, -u, u);
         lat.initialize_with(|_, y| (1.0, -u + gamma * (y as f64 + 0.5), 0.0))
             .unwrap();
         let mut cfg = FpdConfig::new(a, nu);
         cfg.viscosity_ratio = r_eta;
+        cfg.interface_ratio = r_xi;
         let mut c = FpdCoupling::new(cfg, &mut lat, 1).unwrap();
         // Centre of the channel, whose walls lie at y = -1/2 and ny - 1/2.
         let pos = [[24.0, 0.5 * ny as f64 - 0.5]];
@@ -455,7 +464,7 @@ fn internal_flow_of_a_cylinder_in_shear_decreases_with_viscosity_ratio() {
         };
         let eps = c.internal_flow(&lat, 0, v, omega).unwrap() / (gamma * a).powi(2);
         eprintln!(
-            "r_eta {r_eta:>6}: omega / gamma = {:.4}, |V| / (gamma a) = {:.1e}, \
+            "r_eta {r_eta:>6}, r_xi {r_xi:>6}: omega / gamma = {:.4}, |V| / (gamma a) = {:.1e}, \
              eps_v / (gamma a)^2 = {eps:.3e}, {} steps",
             omega / gamma,
             v[0].hypot(v[1]) / (gamma * a),
@@ -463,8 +472,13 @@ fn internal_flow_of_a_cylinder_in_shear_decreases_with_viscosity_ratio() {
         );
         results.push(eps);
     }
+    // Along r_eta at r_xi = 0.125, then along r_xi at r_eta = 100.
     assert!(
         results[0] > results[1] && results[1] > results[2],
+        "{results:?}"
+    );
+    assert!(
+        results[3] > results[1] && results[1] > results[4],
         "{results:?}"
     );
 }
