@@ -93,3 +93,131 @@ pub fn error_against_time(
     root.present().map_err(e)?;
     Ok(())
 }
+
+/// One point of a regime map: where it lies and which class the run fell in.
+pub struct ClassPoint {
+    pub x: f64,
+    pub y: f64,
+    pub class: String,
+}
+
+/// Colour of a class: S2023 Fig. 10a's orbits get fixed colours, other labels follow.
+fn class_colour(class: &str, others: &mut Vec<String>) -> RGBColor {
+    match class {
+        "jeffery" => RGBColor(31, 119, 180),
+        "s-turn" => RGBColor(255, 127, 14),
+        "s-coiled" => RGBColor(44, 160, 44),
+        "stuck" => RGBColor(214, 39, 40),
+        other => {
+            let palette = [
+                RGBColor(148, 103, 189),
+                RGBColor(140, 86, 75),
+                RGBColor(127, 127, 127),
+                RGBColor(23, 190, 207),
+            ];
+            let i = match others.iter().position(|o| o == other) {
+                Some(i) => i,
+                None => {
+                    others.push(other.to_string());
+                    others.len() - 1
+                }
+            };
+            palette[i % palette.len()]
+        }
+    }
+}
+
+/// A regime map: every point coloured by its class, with a legend (S2023 Fig. 10a style).
+/// `x` and `y` are (axis name, logarithmic).
+pub fn regime_map(
+    path: &Path,
+    title: &str,
+    x: (&str, bool),
+    y: (&str, bool),
+    points: &[ClassPoint],
+) -> Result<(), String> {
+    register_font();
+    let ok = |v: f64, log: bool| v.is_finite() && (!log || v > 0.0);
+    let pts: Vec<&ClassPoint> = points
+        .iter()
+        .filter(|p| ok(p.x, x.1) && ok(p.y, y.1))
+        .collect();
+    if pts.is_empty() {
+        return Err("nothing to plot: no variant reported both diagram coordinates".into());
+    }
+    // Axis ranges with a margin: a factor on a log axis, a fraction of the span otherwise.
+    let range = |v: &mut dyn Iterator<Item = f64>, log: bool| {
+        let (lo, hi) = v.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
+        if log {
+            (lo / 3.0, hi * 3.0)
+        } else {
+            let pad = if hi > lo {
+                0.1 * (hi - lo)
+            } else {
+                0.5 * lo.abs().max(1.0)
+            };
+            (lo - pad, hi + pad)
+        }
+    };
+    let (x0, x1) = range(&mut pts.iter().map(|p| p.x), x.1);
+    let (y0, y1) = range(&mut pts.iter().map(|p| p.y), y.1);
+    let e = |e: DrawingAreaErrorKind<_>| format!("plotting {}: {e:?}", path.display());
+    let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(e)?;
+    let mut others = Vec::new();
+    let mut classes: Vec<(String, RGBColor)> = Vec::new();
+    for p in &pts {
+        if !classes.iter().any(|(c, _)| *c == p.class) {
+            let colour = class_colour(&p.class, &mut others);
+            classes.push((p.class.clone(), colour));
+        }
+    }
+    let mut builder = ChartBuilder::on(&root);
+    builder
+        .caption(title, ("sans-serif", 22))
+        .margin(20)
+        .x_label_area_size(50)
+        .y_label_area_size(80);
+    // Linear and logarithmic axes are different chart types: one drawing, four expansions.
+    macro_rules! draw {
+        ($xr:expr, $yr:expr) => {{
+            let mut chart = builder.build_cartesian_2d($xr, $yr).map_err(e)?;
+            chart
+                .configure_mesh()
+                .x_desc(x.0)
+                .y_desc(y.0)
+                .label_style(("sans-serif", 15))
+                .x_label_formatter(&|v| format!("{v:.2e}"))
+                .y_label_formatter(&|v| format!("{v:.2}"))
+                .draw()
+                .map_err(e)?;
+            for (class, colour) in &classes {
+                let c = *colour;
+                chart
+                    .draw_series(
+                        pts.iter()
+                            .filter(|p| p.class == *class)
+                            .map(|p| Circle::new((p.x, p.y), 8, c.filled())),
+                    )
+                    .map_err(e)?
+                    .label(class.clone())
+                    .legend(move |(px, py)| Circle::new((px, py), 6, c.filled()));
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 15))
+                .draw()
+                .map_err(e)?;
+        }};
+    }
+    match (x.1, y.1) {
+        (true, true) => draw!((x0..x1).log_scale(), (y0..y1).log_scale()),
+        (true, false) => draw!((x0..x1).log_scale(), y0..y1),
+        (false, true) => draw!(x0..x1, (y0..y1).log_scale()),
+        (false, false) => draw!(x0..x1, y0..y1),
+    }
+    root.present().map_err(e)?;
+    Ok(())
+}

@@ -36,6 +36,23 @@ pub struct Study {
     #[serde(default)]
     pub set: BTreeMap<String, toml::Value>,
     pub vary: Vec<Vary>,
+    /// A regime map: every variant at (x, y), coloured by the metric's label.
+    #[serde(default)]
+    pub diagram: Option<Diagram>,
+}
+
+/// `[diagram]`: axes of a regime map (e.g. S2023 Fig. 10a, the orbit over K and C), each the
+/// name of a number the nodes derive and report in the summary (`derived`), so that an axis
+/// can be a dimensionless group that several varied keys set together.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Diagram {
+    pub x: String,
+    pub y: String,
+    #[serde(default)]
+    pub log_x: bool,
+    #[serde(default)]
+    pub log_y: bool,
 }
 
 fn dot() -> PathBuf {
@@ -91,6 +108,10 @@ pub struct Row {
     pub wall_seconds: f64,
     pub steps: u64,
     pub status: String,
+    /// The metric's label, for a categorical metric (`orbit`).
+    pub class: Option<String>,
+    /// The diagram's coordinates, read from the summary's derived values.
+    pub point: Option<(f64, f64)>,
 }
 
 /// Read and run a study file; returns the markdown table.
@@ -185,9 +206,33 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path) -> Result<String, Strin
             i + 1,
             variants.len()
         );
-        let result = runner::run(&scene, &opts).map_err(|e| format!("variant {label}: {e}"))?;
+        let result = match runner::run(&scene, &opts) {
+            Ok(r) => r,
+            // A map over parameters meets variants the method cannot carry: keep the row
+            // (with the reason on standard error) instead of losing the study.
+            Err(e) if study.diagram.is_some() => {
+                eprintln!("study {}: variant {label} failed: {e}", study.name);
+                rows.push(Row {
+                    label,
+                    value: f64::NAN,
+                    reference: None,
+                    relative_error: None,
+                    wall_seconds: 0.0,
+                    steps: 0,
+                    status: "failed".into(),
+                    class: None,
+                    point: None,
+                });
+                continue;
+            }
+            Err(e) => return Err(format!("variant {label}: {e}")),
+        };
         let s = &result.summary;
         let m = &s["metrics"][&study.metric];
+        let point = study
+            .diagram
+            .as_ref()
+            .and_then(|d| Some((s["derived"][&d.x].as_f64()?, s["derived"][&d.y].as_f64()?)));
         rows.push(Row {
             label,
             value: m["value"].as_f64().unwrap_or(f64::NAN),
@@ -196,6 +241,8 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path) -> Result<String, Strin
             wall_seconds: s["wall_seconds"].as_f64().unwrap_or(0.0),
             steps: s["steps"].as_u64().unwrap_or(0),
             status: s["status"].as_str().unwrap_or("").to_string(),
+            class: m["label"].as_str().map(str::to_string),
+            point,
         });
     }
     let csv = render_csv(&rows);
@@ -213,12 +260,35 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path) -> Result<String, Strin
             })
         })
         .collect();
-    crate::plot::error_against_time(
-        &out.join(format!("{}.png", study.name)),
-        &title,
-        &format!("relative error of {}", study.metric),
-        &points,
-    )?;
+    // A categorical metric (no reference) has no error to plot.
+    if !points.is_empty() {
+        crate::plot::error_against_time(
+            &out.join(format!("{}.png", study.name)),
+            &title,
+            &format!("relative error of {}", study.metric),
+            &points,
+        )?;
+    }
+    if let Some(d) = &study.diagram {
+        let points: Vec<crate::plot::ClassPoint> = rows
+            .iter()
+            .filter_map(|r| {
+                let (x, y) = r.point?;
+                Some(crate::plot::ClassPoint {
+                    x,
+                    y,
+                    class: r.class.clone().unwrap_or_else(|| r.status.clone()),
+                })
+            })
+            .collect();
+        crate::plot::regime_map(
+            &out.join(format!("{}_diagram.png", study.name)),
+            &title,
+            (&d.x, d.log_x),
+            (&d.y, d.log_y),
+            &points,
+        )?;
+    }
     Ok(md)
 }
 
@@ -227,18 +297,23 @@ fn fmt_opt(v: Option<f64>) -> String {
 }
 
 pub fn render_csv(rows: &[Row]) -> String {
-    let mut s = String::from("variant,value,reference,relative_error,wall_seconds,steps,status\n");
+    let mut s = String::from(
+        "variant,value,reference,relative_error,wall_seconds,steps,status,class,x,y\n",
+    );
     for r in rows {
         let _ = writeln!(
             s,
-            "\"{}\",{},{},{},{:.4},{},{}",
+            "\"{}\",{},{},{},{:.4},{},{},{},{},{}",
             r.label,
             r.value,
             r.reference.map_or(String::new(), |v| v.to_string()),
             r.relative_error.map_or(String::new(), |v| v.to_string()),
             r.wall_seconds,
             r.steps,
-            r.status
+            r.status,
+            r.class.as_deref().unwrap_or(""),
+            r.point.map_or(String::new(), |p| p.0.to_string()),
+            r.point.map_or(String::new(), |p| p.1.to_string()),
         );
     }
     s
@@ -249,9 +324,12 @@ pub fn render_markdown(title: &str, metric: &str, rows: &[Row]) -> String {
     for r in rows {
         let _ = writeln!(
             s,
-            "| {} | {:.6} | {} | {} | {:.3} | {} | {} |",
+            "| {} | {} | {} | {} | {:.3} | {} | {} |",
             r.label,
-            r.value,
+            match &r.class {
+                Some(c) => format!("{c} ({})", r.value),
+                None => format!("{:.6}", r.value),
+            },
             fmt_opt(r.reference),
             r.relative_error
                 .map_or(String::new(), |e| format!("{:.3} %", 100.0 * e)),
