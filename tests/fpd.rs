@@ -230,3 +230,43 @@ fn fpd_hard_case_stays_bounded() {
     }
     println!("hard case: orbit {}", s["metrics"]["orbit"]["label"]);
 }
+
+/// S2023 section IV C at Re_ps = 1.5 on a coarse lattice (d = 4, as
+/// docs/validation/fpd_shape_diagram.study.toml): at C = 0.5 a stiff fibre (K = 3.3) tumbles
+/// as a Jeffery orbit and a floppy one (K = 3.3e-5) coils into an S (S2023 Fig. 7a i, iii);
+/// at C = 0.87 the stiff fibre gets stuck (S2023 Fig. 7b-4: stuck at Re_ps = 6; Fig. 5c:
+/// C_cr ~ 0.7 at Re_ps = 1.5).
+#[test]
+fn fpd_orbits_fall_in_s2023_regimes() {
+    let run = |name: &str, k: f64, c_row: usize| {
+        let rows = [
+            ("[100, 80]", 0.333333, 16.0, "[32.0, 39.5, 0.0]", 48000),
+            ("[100, 46]", 0.579710, 27.82609, "[32.0, 22.5, 0.0]", 27600),
+        ];
+        let (grid, eta, ks, start, steps) = rows[c_row];
+        let o: Vec<String> = vec![
+            "fibre.0.bead_radius=2.0".into(),
+            format!("fibre.0.bending_number={k}"),
+            format!("fluid.grid={grid}"),
+            format!("fluid.viscosity={eta}"),
+            format!("fibre.0.stretch_stiffness={ks}"),
+            format!("fibre.0.start={start}"),
+            format!("time.steps={steps}"),
+            "output.interval=5000".into(),
+            "analysis.metrics=[\"orbit\",\"stuck_angle_deg\"]".into(),
+        ];
+        let s = run_in_process(&config("fpd/flexible_shear.toml"), &o, name);
+        let m = &s["metrics"]["orbit"];
+        println!(
+            "K = {k}, C = {:.3}: {} ({}), stuck angle {}",
+            s["derived"]["fluid.confinement"],
+            m["label"],
+            m["note"],
+            s["metrics"]["stuck_angle_deg"]["value"]
+        );
+        m["label"].as_str().unwrap().to_string()
+    };
+    assert_eq!(run("fpd-orbit-rigid", 3.3, 0), "jeffery");
+    assert_eq!(run("fpd-orbit-floppy", 3.3e-5, 0), "s-coiled");
+    assert_eq!(run("fpd-orbit-confined", 3.3, 1), "stuck");
+}
