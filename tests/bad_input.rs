@@ -166,14 +166,17 @@ fn unwritable_out() {
     );
 }
 
+/// The fluid node provides `capillarity` now (the only effect a scene could ask for that no
+/// component provided), so an empty `[fluid.binary]` reaches the fluid node, which names
+/// the missing key.
 #[test]
-fn a_scene_asking_for_an_effect_no_component_provides_is_refused() {
+fn an_incomplete_binary_fluid_is_refused_by_the_fluid_node() {
     check(
         "binary-fluid",
         &format!(
             "{GOOD}\n[fluid]\nmethod = \"spm\"\ngrid = [16, 16]\nviscosity = 1.0\n[fluid.binary]\n"
         ),
-        &["capillarity", "no component provides it"],
+        &["fluid.binary.initial", "required key is missing"],
     );
 }
 

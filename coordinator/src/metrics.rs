@@ -18,6 +18,8 @@ pub const KNOWN: &[&str] = &[
     "half_turn_period_gamma",
     "effective_aspect_ratio",
     "stuck_angle_deg",
+    "surface_tension",
+    "contact_angle_deg",
 ];
 
 /// Metrics that need fibre 0's orientation at every step.
@@ -234,6 +236,9 @@ pub fn compute(
                  the wall-speed difference",
             ),
             "drag_ratio" => drag_ratio(ctx)?,
+            "surface_tension" | "contact_angle_deg" => {
+                crate::capillary_metrics::capillary_metric(name, ctx.diagnostics, ctx.derived)?
+            }
             "tumbling_period_gamma" => {
                 let gamma = lookup(ctx.derived, "fluid.shear_rate")
                     .ok_or("metric `tumbling_period_gamma` needs walls (a shear rate)")?;

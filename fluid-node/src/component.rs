@@ -8,6 +8,12 @@
 //!   penalty of eqs. 37–38 (beads and walls) to reach u^{n+1}, and report diagnostics.
 //!
 //! A scene without fibres runs the same two phases without reading bead states.
+//!
+//! With `[fluid.binary]` a third phase comes first, `fluid-phase-field` (step n): read the
+//! bead states of step n (positions n), advance ψ by one Cahn–Hilliard step advected by uⁿ
+//! and report `mean_psi`, `max_abs_psi`, ...; the momentum exchange then adds the capillary
+//! force with ψⁿ⁺¹ and φⁿ⁺¹ to uⁿ -> u* (L2020 eq. 34; [`crate::binary_fluid`]).
+use crate::binary_fluid::BinaryFluid;
 use crate::config::{parse_scene, FluidConfig, InitialVelocity};
 use crate::grid::Grid;
 use crate::spectral_ns::SpectralNs;
@@ -69,6 +75,10 @@ struct Run {
     impulses: Vec<BeadImpulse>,
     /// Plane-averaged u_x per y (Couette diagnostic).
     profile: Vec<f64>,
+    /// `[fluid.binary]`: the phase field (`None`: a single fluid, no Cahn–Hilliard work).
+    binary: Option<BinaryFluid>,
+    /// The step whose `fluid-phase-field` ran last (binary fluids).
+    psi_step: Option<u64>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -77,6 +87,9 @@ struct StateHeader {
     dimensions: usize,
     grid: [usize; 3],
     pending: Option<u64>,
+    /// Binary fluids: the step whose fluid-phase-field ran last (absent for a single fluid).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    psi_step: Option<u64>,
 }
 
 impl FluidComponent {
@@ -124,7 +137,9 @@ impl FluidComponent {
 }
 
 impl Run {
-    /// Read the bead states of step `step`'s phase `phase` and place the profiles.
+    /// Read the bead states of step `step`'s phase `phase` and place the profiles: the
+    /// states published with step `step + 1` (positions n+1), or with `step` for
+    /// `fluid-phase-field` (positions n).
     fn read_states(
         &mut self,
         step: u64,
@@ -132,11 +147,15 @@ impl Run {
         exchange: &mut dyn Exchange,
     ) -> Result<(), ComponentError> {
         let h = exchange.read_states(Port::BeadStates, &mut self.states)?;
-        if h.step != step + 1 {
+        let expect = if phase == Phase::FluidPhaseField {
+            step
+        } else {
+            step + 1
+        };
+        if h.step != expect {
             return Err(ComponentError(format!(
-                "fluid-node: {phase} of step {step} expects the bead states of step {}, \
+                "fluid-node: {phase} of step {step} expects the bead states of step {expect}, \
                  the latest publication is of step {}",
-                step + 1,
                 h.step
             )));
         }
@@ -195,8 +214,13 @@ impl Component for FluidComponent {
             kind: "fluid".into(),
             models: vec!["spm".into(), "fpd-lbm".into()],
             coupling_schemes: vec!["spm".into(), "fpd".into()],
-            effects: vec![effects::HYDRODYNAMICS.into(), effects::WALLS.into()],
+            effects: vec![
+                effects::HYDRODYNAMICS.into(),
+                effects::WALLS.into(),
+                effects::CAPILLARITY.into(),
+            ],
             phases: vec![
+                Phase::FluidPhaseField,
                 Phase::FluidMomentumExchange,
                 Phase::FluidPenalty,
                 Phase::FluidLatticeStep,
@@ -219,6 +243,23 @@ impl Component for FluidComponent {
                 param("walls.thickness", len, Some("4.0"), "slab thickness T: inner faces at y = T - 1/2 and y = ny - T - 1/2, gap ny - 2 T"),
                 param("fibre.N.beads", "1", None, "beads of fibre N (read for the number of bead records)"),
                 param("fibre.N.bead_radius", len, None, "bead radius r_b of fibre N (eq. 25)"),
+                param("fibre.N.affinity", "1", Some("0.0"), "[fluid.binary]: wetting affinity psi0 in [-1, 1] of fibre N's beads; psi* = (2 psi0 + psi0^3) / 3 (L2020 eq. 31)"),
+                param("fluid.binary", "1", None, "table: a binary fluid A (psi = +1) / B (psi = -1), ternary Cahn-Hilliard of L2020 eqs. 27-34 (absent: a single fluid)"),
+                param("fluid.binary.xi", len, Some("2.0"), "Cahn-Hilliard interfacial length xi (eq. 28); L2020 uses the same xi as fluid.xi, and the contact-angle reference needs them equal"),
+                param("fluid.binary.e0", "mass / (length time^2)", Some("1.0"), "energy density scale e0 = kB T0 / v0 (eq. 27); or give fluid.binary.sigma"),
+                param("fluid.binary.sigma", "mass / time^2", Some("(2 sqrt 2 / 3) e0 xi"), "A/B surface tension sigma_AB instead of e0: e0 = 3 sigma / (2 sqrt 2 xi)"),
+                param("fluid.binary.mobility", "length^4 time / mass", Some("1.0"), "mobility M (eq. 32), D0 = e0 M; or give fluid.binary.peclet"),
+                param("fluid.binary.peclet", "1", None, "Pe = U0 L0 / (e0 M) (eq. 41, L0 = 1) instead of mobility; needs U0"),
+                param("fluid.binary.velocity_scale", "length / time", Some("max |walls.velocity|"), "reference velocity U0 of eqs. 39-41 (for peclet and the reported Re, We, Pe)"),
+                param("fluid.binary.stabilisation", "1", Some("3.0"), "linear stabilisation S of the semi-implicit step (>= 2.815: no diffusive time-step limit)"),
+                param("fluid.binary.wall_affinity", "1", Some("0.0"), "psi0 of the walls' solid (eq. 31)"),
+                param("fluid.binary.initial", "1", None, "\"flat\" (normal, position, width), \"droplet\" (centre, radius, inside) or \"half-droplet\" (centre, normal, radius, inside; L2020 section 3.5)"),
+                param("fluid.binary.normal", "1", Some("last axis"), "flat: axis index or a vector along an axis, pointing into fluid A; half-droplet: direction from the base into the droplet"),
+                param("fluid.binary.position", len, None, "flat: coordinate of the interface where fluid A begins along the normal"),
+                param("fluid.binary.width", len, Some("half the box"), "flat: thickness of the periodic slab of fluid A (a second interface closes it)"),
+                param("fluid.binary.centre", len, None, "droplet: centre; half-droplet: centre of the base"),
+                param("fluid.binary.radius", len, None, "droplet, half-droplet: radius"),
+                param("fluid.binary.inside", "1", Some("\"A\""), "droplet, half-droplet: the fluid inside, \"A\" or \"B\""),
             ],
             inputs: vec![
             PortDescription {
@@ -275,7 +316,13 @@ impl Component for FluidComponent {
                  and ny - 1/2; configure refuses wall Mach numbers above 0.3 and a run stops \
                  above 0.7"
                     .into(),
-                "Cahn-Hilliard (fluid.binary, phase fluid-phase-field) is not coupled yet"
+                "fluid.binary: phase fluid-phase-field (first in the step) advances psi by one \
+                 semi-implicit Cahn-Hilliard step advected by u^n with phi at X^n (mean psi \
+                 conserved to round-off); fluid-momentum-exchange adds the capillary force \
+                 -psi grad mu_psi - phi grad mu_phi (L2020 eqs. 33-34) with phi at X^(n+1) to \
+                 u^n -> u*, so the impulses of eqs. 35-36 carry the capillary force. configure \
+                 refuses a time step above the Cahn-Hilliard limits or the capillary limit \
+                 (Galusinski & Vigneaux 2008)"
                     .into(),
             ],
         }
@@ -299,7 +346,7 @@ impl Component for FluidComponent {
             return Ok(configured);
         }
         let cfg = parse_scene(scene_toml).map_err(ComponentError)?;
-        let limits = stability::check(&cfg).map_err(ComponentError)?;
+        let mut limits = stability::check(&cfg).map_err(ComponentError)?;
         let grid = Grid::new(cfg.dimensions, cfg.grid);
         let nu = cfg.kinematic_viscosity();
         let accel = cfg.body_force.map(|f| f / cfg.density);
@@ -319,6 +366,25 @@ impl Component for FluidComponent {
             .flat_map(|f| std::iter::repeat_n(f.bead_radius, f.beads))
             .collect();
         let spm = Spm::new(grid, cfg.density, cfg.xi, cfg.xi_cutoff, &radii, walls);
+        let binary = match &cfg.binary {
+            None => None,
+            Some(b) => {
+                let psi0: Vec<f64> = cfg
+                    .fibres
+                    .iter()
+                    .flat_map(|f| std::iter::repeat_n(f.affinity, f.beads))
+                    .collect();
+                let fluid = BinaryFluid::new(grid, b, &psi0, cfg.walls.is_some())
+                    .map_err(ComponentError)?;
+                limits.extend(
+                    fluid
+                        .check_time_step(stability::initial_speed(&cfg), cfg.density, cfg.viscosity)
+                        .map_err(ComponentError)?,
+                );
+                ns.enable_force_density();
+                Some(fluid)
+            }
+        };
 
         let mut active = Vec::new();
         if !cfg.fibres.is_empty() {
@@ -326,6 +392,9 @@ impl Component for FluidComponent {
         }
         if cfg.walls.is_some() {
             active.push(effects::WALLS.to_string());
+        }
+        if binary.is_some() {
+            active.push(effects::CAPILLARITY.to_string());
         }
 
         let mut derived = vec![
@@ -376,6 +445,10 @@ impl Component for FluidComponent {
             }
         }
 
+        if let Some(b) = &cfg.binary {
+            derived.extend(crate::binary_fluid::derived::numbers(&cfg, b, grid));
+        }
+
         let total_beads = radii.len();
         let configured = Configured {
             beads_per_fibre: Vec::new(),
@@ -395,6 +468,8 @@ impl Component for FluidComponent {
             pending: None,
             states: Vec::with_capacity(total_beads),
             impulses: vec![BeadImpulse::default(); total_beads],
+            binary,
+            psi_step: None,
         });
         Ok(configured)
     }
@@ -417,6 +492,36 @@ impl Component for FluidComponent {
         let run = self.run_mut()?;
         let has_beads = run.total_beads > 0;
         match phase {
+            Phase::FluidPhaseField => {
+                let no_binary = || {
+                    ComponentError(
+                        "fluid-node: fluid-phase-field needs a binary fluid ([fluid.binary])"
+                            .into(),
+                    )
+                };
+                if run.binary.is_none() {
+                    return Err(no_binary());
+                }
+                if let Some(p) = run.pending {
+                    return Err(ComponentError(format!(
+                        "fluid-node: fluid-phase-field of step {step} requested while the \
+                         penalty of step {p} is still pending"
+                    )));
+                }
+                if has_beads {
+                    run.read_states(step, phase, exchange)?;
+                }
+                let (spm, ns) = (&run.spm, &run.ns);
+                let Some(b) = run.binary.as_mut() else {
+                    return Err(no_binary());
+                };
+                b.phase_field_step(spm, ns.velocity_components())
+                    .map_err(|e| ComponentError(format!("{e} (at step {step})")))?;
+                run.psi_step = Some(step);
+                Ok(PhaseReport {
+                    diagnostics: b.report(spm),
+                })
+            }
             Phase::FluidMomentumExchange => {
                 if let Some(p) = run.pending {
                     return Err(ComponentError(format!(
@@ -424,8 +529,19 @@ impl Component for FluidComponent {
                          the penalty of step {p} is still pending"
                     )));
                 }
+                if run.binary.is_some() && run.psi_step != Some(step) {
+                    return Err(ComponentError(format!(
+                        "fluid-node: fluid-momentum-exchange of step {step} requested before \
+                         fluid-phase-field of step {step} (a binary fluid runs it first)"
+                    )));
+                }
                 if has_beads {
                     run.read_states(step, phase, exchange)?;
+                }
+                if let Some(b) = run.binary.as_mut() {
+                    // Eq. 34's capillary terms with psi^{n+1} and phi^{n+1}.
+                    b.load_capillary_force(&run.spm, &mut run.ns, run.cfg.density)
+                        .map_err(ComponentError)?;
                 }
                 // Eq. 34: u^n -> u*.
                 run.ns.advance_intermediate();
@@ -481,8 +597,8 @@ impl Component for FluidComponent {
                 run.report(step)
             }
             other => Err(ComponentError(format!(
-                "fluid-node does not serve phase {other} (it serves fluid-momentum-exchange \
-                 and fluid-penalty; Cahn-Hilliard and the FPD coupling are not available yet)"
+                "fluid-node: phase {other} does not belong to fluid.method = \"spm\" (it \
+                 serves fluid-phase-field, fluid-momentum-exchange and fluid-penalty)"
             ))),
         }
     }
@@ -503,6 +619,7 @@ impl Component for FluidComponent {
             dimensions: g.dims,
             grid: g.sizes(),
             pending: run.pending,
+            psi_step: run.psi_step,
         };
         let mut out = serde_json::to_vec(&header)
             .map_err(|e| ComponentError(format!("fluid-node: cannot serialise the state: {e}")))?;
@@ -510,6 +627,13 @@ impl Component for FluidComponent {
         out.reserve(g.dims * g.modes() * 16);
         for c in 0..g.dims {
             for v in run.ns.spectrum(c) {
+                out.extend_from_slice(&v.re.to_le_bytes());
+                out.extend_from_slice(&v.im.to_le_bytes());
+            }
+        }
+        // A binary fluid appends its spectral psi (and the same scene restores it).
+        if let Some(b) = &run.binary {
+            for v in b.spectrum() {
                 out.extend_from_slice(&v.re.to_le_bytes());
                 out.extend_from_slice(&v.im.to_le_bytes());
             }
@@ -548,11 +672,12 @@ impl Component for FluidComponent {
             )));
         }
         let body = &state[nl + 1..];
-        if body.len() != g.dims * g.modes() * 16 {
+        let fields = g.dims + usize::from(run.binary.is_some());
+        if body.len() != fields * g.modes() * 16 {
             return Err(not_state(&format!(
                 "{} bytes of spectrum, expected {}",
                 body.len(),
-                g.dims * g.modes() * 16
+                fields * g.modes() * 16
             )));
         }
         let mut spectrum = vec![vec![Complex64::default(); g.modes()]; g.dims];
@@ -566,8 +691,18 @@ impl Component for FluidComponent {
             }
         }
         run.ns.set_spectrum(&spectrum);
+        if let Some(b) = run.binary.as_mut() {
+            let psi: Vec<Complex64> = (0..g.modes())
+                .map(|_| {
+                    let re = words.next().unwrap_or(0.0);
+                    Complex64::new(re, words.next().unwrap_or(0.0))
+                })
+                .collect();
+            b.set_spectrum(&psi).map_err(ComponentError)?;
+        }
         run.spm.invalidate();
         run.pending = header.pending;
+        run.psi_step = header.psi_step;
         Ok(())
     }
 }

@@ -1,7 +1,7 @@
 //! The part of the scene the fluid node reads: `dimensions`, `time.dt`, the `[fluid]` and
-//! `[walls]` tables, and from each `[[fibre]]` table only `beads` and `bead_radius` (plus
-//! `spacing` and `youngs_modulus` when present, for derived numbers). The fibre node owns and
-//! checks the other fibre keys.
+//! `[walls]` tables (with `[fluid.binary]`, read by [`crate::binary_fluid::scene`]), and from
+//! each `[[fibre]]` table only `beads` and `bead_radius` (plus `spacing`, `youngs_modulus` and
+//! `affinity` when present). The fibre node owns and checks the other fibre keys.
 //!
 //! Units are grid units: the grid spacing is 1, lengths are in grid spacings.
 //! Every refusal names the dotted key, the value and what was expected; nothing panics.
@@ -55,6 +55,9 @@ pub struct FibreInfo {
     pub youngs_modulus: Option<f64>,
     /// Bead-spring k_b if given (for the derived bending number K of S2023 eq. 18).
     pub bending_stiffness: Option<f64>,
+    /// Wetting affinity psi0 (L2020 eq. 31; `fibre.N.affinity`, default 0, checked in
+    /// [-1, 1] here since the fluid node uses it).
+    pub affinity: f64,
 }
 
 impl FibreInfo {
@@ -87,6 +90,8 @@ pub struct FluidConfig {
     pub initial_velocity: InitialVelocity,
     pub walls: Option<WallsConfig>,
     pub fibres: Vec<FibreInfo>,
+    /// `[fluid.binary]`: the ternary Cahn–Hilliard fluid (`None`: a single fluid).
+    pub binary: Option<crate::binary_fluid::BinaryConfig>,
 }
 
 impl FluidConfig {
@@ -182,14 +187,6 @@ pub fn parse_scene(scene_toml: &str) -> Result<FluidConfig, String> {
         };
     known_keys("fluid", &fluid, &FLUID_KEYS)?;
     let raw: RawFluid = deserialize("fluid", fluid)?;
-    if raw.binary.is_some() {
-        return Err(
-            "fluid.binary: a binary fluid needs the ternary Cahn–Hilliard model, and \
-             Cahn–Hilliard is not available yet in fluid-node; remove [fluid.binary] to \
-             simulate a single fluid"
-                .into(),
-        );
-    }
     if raw.method != "spm" {
         return Err(format!(
             "fluid.method: expected \"spm\" (the Smoothed Profile Method; FPD on \
@@ -320,7 +317,20 @@ pub fn parse_scene(scene_toml: &str) -> Result<FluidConfig, String> {
         }
     }
 
+    let binary = match &raw.binary {
+        None => None,
+        Some(v) => {
+            let wall_speed = walls
+                .as_ref()
+                .map_or(0.0, |w| w.velocity[0].abs().max(w.velocity[1].abs()));
+            Some(crate::binary_fluid::scene::parse(
+                v, dimensions, grid, wall_speed, dt,
+            )?)
+        }
+    };
+
     Ok(FluidConfig {
+        binary,
         dimensions,
         dt,
         grid,
@@ -393,7 +403,20 @@ pub fn read_fibres(table: &toml::Table) -> Result<Vec<FibreInfo>, String> {
             .and_then(number)
             .filter(|e| e.is_finite() && *e > 0.0);
         let bending_stiffness = t.get("bending_stiffness").and_then(number);
+        let affinity = match t.get("affinity") {
+            None => 0.0,
+            Some(v) => match number(v) {
+                Some(a) if (-1.0..=1.0).contains(&a) => a,
+                _ => {
+                    return Err(format!(
+                        "{p}.affinity: expected psi0 in [-1, 1] (L2020 eq. 31), got {}",
+                        describe_toml(v)
+                    ))
+                }
+            },
+        };
         out.push(FibreInfo {
+            affinity,
             beads: beads as usize,
             bead_radius,
             spacing,
@@ -479,7 +502,15 @@ viscosity = 0.5
             ("body_force = 3", "fluid.body_force: invalid type: integer `3`, expected an array"),
             ("initial_velocity = \"couette\"", "fluid.initial_velocity: \"couette\" needs a [walls] table"),
             ("initial_velocity = \"poiseuille\"", "fluid.initial_velocity: expected \"rest\" or \"couette\", got \"poiseuille\""),
-            ("[fluid.binary]\nmobility = 1", "fluid.binary: a binary fluid needs the ternary Cahn–Hilliard model, and Cahn–Hilliard is not available yet"),
+            ("[fluid.binary]\nmobility = 1", "fluid.binary.initial: required key is missing"),
+            ("[fluid.binary]\ninitial = \"flat\"\nposition = 12\ncolour = 1", "fluid.binary.colour: unknown key (set to 1); expected one of `xi`, `e0`, `sigma`, `mobility`, `peclet`, `velocity_scale`, `stabilisation`, `wall_affinity`, `initial`, `normal`, `position`, `width`, `centre`, `radius`, `inside`"),
+            ("[fluid.binary]\ninitial = \"flat\"\nposition = 12\nradius = 3", "fluid.binary.radius: does not apply to initial = \"flat\""),
+            ("[fluid.binary]\ninitial = \"flat\"\nposition = 12\nnormal = [1, 1]", "fluid.binary.normal: expected an axis 0 or 1, or a vector along x or y"),
+            ("[fluid.binary]\ninitial = \"droplet\"\ncentre = [1, 2]", "fluid.binary.radius: required with initial = \"droplet\""),
+            ("[fluid.binary]\ninitial = \"flat\"\nposition = 12\npeclet = 1", "fluid.binary.peclet: needs the velocity scale U0"),
+            ("[fluid.binary]\ninitial = \"flat\"\nposition = 12\ne0 = 1\nsigma = 2", "fluid.binary.sigma: give either e0 or sigma"),
+            ("[fluid.binary]\ninitial = \"bubble\"", "fluid.binary.initial: expected \"flat\", \"droplet\" or \"half-droplet\", got \"bubble\""),
+            ("[[fibre]]\nbeads = 2\nbead_radius = 1\naffinity = 2", "fibre.0.affinity: expected psi0 in [-1, 1] (L2020 eq. 31), got 2"),
             ("[walls]\nvelocity = [0, 1]\nspeed = 2", "walls.speed: unknown key (set to 2); expected one of `velocity`, `thickness`"),
             ("[walls]\nvelocity = [0, 1, 2]", "walls.velocity: expected [bottom, top] (two finite numbers), got [0, 1, 2]"),
             ("[walls]\nthickness = 2", "walls.velocity: required key is missing"),

@@ -5,6 +5,8 @@
 //!   L2020 eq. 34) on [`transform`]'s planned real FFTs over a [`grid::Grid`];
 //! - [`cahn_hilliard`]: the ternary Cahn–Hilliard phase field of L2020 (eqs. 27–34),
 //!   semi-implicit spectral step, capillary force, wall equilibria for the contact angle;
+//! - [`binary_fluid`]: `[fluid.binary]`, the phase field coupled into the SPM step (phase
+//!   fluid-phase-field and the capillary force in u* of eq. 34);
 //! - [`smoothed_profile`]: a bead's truncated tanh profile (L2020 eq. 25);
 //! - [`spm`]: the solid fraction (eq. 26), momentum exchange (eqs. 35–36), penalty (37–38);
 //! - [`walls`]: two moving slabs normal to y and the Couette reference;
@@ -15,6 +17,7 @@
 //!   Guo forcing, bounce-back walls (the flow solver of FPD on MRT-LBM, S2023);
 //! - [`stability`]: time-step limits; [`config`]: the `[fluid]`/`[walls]` part of a scene;
 //! - [`component`]: [`FluidComponent`], the [`cosim::Component`] the executable serves.
+pub mod binary_fluid;
 pub mod cahn_hilliard;
 pub mod component;
 pub mod config;

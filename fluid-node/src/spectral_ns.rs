@@ -11,7 +11,11 @@
 //! - advection is explicit (Euler), in divergence form so that the mean momentum is untouched
 //!   to round-off, with the 2/3 rule applied to `N̂`;
 //! - `P = I - k kᵀ / k²` projects onto divergence-free fields (the intermediate pressure `p*`);
-//! - the body force `f` (a force density) acts on the mean mode only.
+//! - the body force `f` (a force density) acts on the mean mode only;
+//! - a binary fluid adds the capillary force density `f_c = -ψ∇μ_ψ - φ∇μ_φ` of L2020 eq. 34
+//!   (loaded by [`SpectralNs::set_force_density`] before each step, on every mode: it is
+//!   already a pseudo-spectral product, not dealiased, as in the Cahn–Hilliard step); a single
+//!   fluid never allocates or touches it.
 //!
 //! The penalty of L2020 eqs. 37–38 is added by [`SpectralNs::add_projected`]: `ûⁿ⁺¹ = û* + P f̂`.
 //!
@@ -43,6 +47,9 @@ pub struct SpectralNs {
     tmp_hat: Vec<Complex64>,
     scratch: Vec<f64>,
     partials: Vec<f64>,
+    /// Transformed force density over density `f̂/ρ` per component (binary fluids only;
+    /// empty until [`SpectralNs::enable_force_density`]).
+    force_hat: Vec<Vec<Complex64>>,
 }
 
 /// Up to three components as slices (empty beyond `v.len()`): pass `&mut out[..d]`.
@@ -80,7 +87,47 @@ impl SpectralNs {
             tmp_hat: vec![Complex64::default(); grid.modes()],
             scratch: vec![0.0; grid.cells()],
             partials: Vec::with_capacity(grid.rows()),
+            force_hat: Vec::new(),
         }
+    }
+
+    /// Allocate the force-density buffers (zero force) so that
+    /// [`SpectralNs::set_force_density`] allocates nothing; from now on every
+    /// [`SpectralNs::advance_intermediate`] adds the loaded force.
+    pub fn enable_force_density(&mut self) {
+        let g = self.grid;
+        self.force_hat = vec![vec![Complex64::default(); g.modes()]; g.dims];
+    }
+
+    /// Load a force density `f` (mass / (length² time²), one real field per component, at
+    /// least `dims`) for the next [`SpectralNs::advance_intermediate`]: it adds `Δt f̂ / ρ`
+    /// before the viscous factor and the projection (L2020 eq. 34's capillary terms). Needs
+    /// [`SpectralNs::enable_force_density`] first (otherwise an error).
+    pub fn set_force_density(&mut self, f: &[Vec<f64>], rho: f64) -> Result<(), String> {
+        let d = self.grid.dims;
+        if self.force_hat.len() != d || f.len() < d {
+            return Err(format!(
+                "spectral-ns: a force density needs enable_force_density and {d} components \
+                 (got {})",
+                f.len()
+            ));
+        }
+        let inv_rho = 1.0 / rho;
+        for (c, fc) in f.iter().enumerate().take(d) {
+            if fc.len() != self.grid.cells() {
+                return Err(format!(
+                    "spectral-ns: force component {c} has {} values, the grid {}",
+                    fc.len(),
+                    self.grid.cells()
+                ));
+            }
+            self.transform.forward(fc, &mut self.force_hat[c]);
+            self.force_hat[c]
+                .par_iter_mut()
+                .with_min_len(GRAIN)
+                .for_each(|v| *v *= inv_rho);
+        }
+        Ok(())
     }
 
     pub fn grid(&self) -> Grid {
@@ -233,6 +280,8 @@ impl SpectralNs {
         let w = &self.waves;
         let decay = &self.decay;
         let nl = &self.nl_hat;
+        let force = &self.force_hat;
+        let forced = !force.is_empty();
         let nxh = g.nxh();
         let mean_kick: [f64; 3] =
             std::array::from_fn(|c| dt * self.body_accel[c] * g.cells() as f64);
@@ -253,6 +302,9 @@ impl SpectralNs {
                     }
                     if r == 0 && ix == 0 {
                         s.re += mean_kick[c];
+                    }
+                    if forced {
+                        s += force[c][r * nxh + ix] * dt;
                     }
                     v[c] = s * e;
                 }

@@ -84,6 +84,11 @@ impl Spm {
         self.beads.len()
     }
 
+    /// The beads' profiles (eq. 25) as last placed, in bead order.
+    pub fn profiles(&self) -> &[BeadProfile] {
+        &self.beads
+    }
+
     /// Total solid fraction (beads and walls, before normalisation) per node.
     pub fn phi(&self) -> &[f64] {
         &self.phi

@@ -64,10 +64,11 @@ fn description_names_the_contract() {
     assert_eq!(d.kind, "fluid");
     assert_eq!(d.models, vec!["spm", "fpd-lbm"]);
     assert_eq!(d.coupling_schemes, vec!["spm", "fpd"]);
-    assert_eq!(d.effects, vec!["hydrodynamics", "walls"]);
+    assert_eq!(d.effects, vec!["hydrodynamics", "walls", "capillarity"]);
     assert_eq!(
         d.phases,
         vec![
+            Phase::FluidPhaseField,
             Phase::FluidMomentumExchange,
             Phase::FluidPenalty,
             Phase::FluidLatticeStep
@@ -149,7 +150,7 @@ fn bad_scenes_are_refused_with_the_key_and_never_panic() {
     ];
     let want = [
         "fluid.viscosity: expected a positive number, got -1",
-        "fluid.binary: a binary fluid needs the ternary Cahn–Hilliard model, and Cahn–Hilliard is not available yet",
+        "fluid.binary.initial: required key is missing",
         "fluid.grid: a 2D scene expects [nx, ny], got [48, 40, 3]",
         "walls.colour: unknown key (set to 3); expected one of `velocity`, `thickness`",
         "time step too large for the fluid (advective CFL limit): time.dt = 30 exceeds 2.500000e1",
@@ -235,7 +236,7 @@ fn phases_run_in_order_and_inputs_are_checked() {
         .unwrap_err()
         .0;
     assert!(
-        e.starts_with("fluid-node does not serve phase fluid-phase-field"),
+        e.starts_with("fluid-node: fluid-phase-field needs a binary fluid ([fluid.binary])"),
         "{e}"
     );
     // 2D: angular impulses along z only.
