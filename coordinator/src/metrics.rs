@@ -22,16 +22,6 @@ pub const KNOWN: &[&str] = &[
     "contact_angle_deg",
 ];
 
-/// Metrics that need fibre 0's orientation at every step.
-pub const NEED_TRAJECTORY: &[&str] = &[
-    "tumbling_period_gamma",
-    "min_end_to_end_over_length",
-    "orbit",
-    "half_turn_period_gamma",
-    "effective_aspect_ratio",
-    "stuck_angle_deg",
-];
-
 /// The orbit metrics (S2023 section IV), computed together by [`crate::orbit`].
 const ORBIT_METRICS: &[&str] = &[
     "orbit",
@@ -39,6 +29,12 @@ const ORBIT_METRICS: &[&str] = &[
     "effective_aspect_ratio",
     "stuck_angle_deg",
 ];
+
+/// Whether metric `name` needs fibre 0's orientation at every step.
+pub fn needs_trajectory(name: &str) -> bool {
+    ["tumbling_period_gamma", "min_end_to_end_over_length"].contains(&name)
+        || ORBIT_METRICS.contains(&name)
+}
 
 /// Everything a metric may look at, at the end of a run.
 pub struct Context<'a> {

@@ -482,7 +482,7 @@ fn drive(
             .analysis
             .metrics
             .iter()
-            .any(|m| crate::metrics::NEED_TRAJECTORY.contains(&m.as_str()));
+            .any(|m| crate::metrics::needs_trajectory(m));
     let mut trajectory = crate::trajectory::Trajectory::default();
     if track {
         trajectory.push(0.0, &states, beads[0]);
