@@ -270,3 +270,56 @@ fn fpd_orbits_fall_in_s2023_regimes() {
     assert_eq!(run("fpd-orbit-floppy", 3.3e-5, 0), "s-coiled");
     assert_eq!(run("fpd-orbit-confined", 3.3, 1), "stuck");
 }
+
+/// S2023 Fig. 4 on a small box: a held cylinder (d = 4) in a uniform stream at Re = 10
+/// and 20, against Dennis & Chang 1970 (C_D = 2.846, 2.045). The box is 32 d x 32 d, the cylinder 12 d
+/// downstream of the sponge: wall blockage (d / H = 1/32) and the short upstream run raise
+/// C_D by about 4 % here (docs/validation/fpd.md: 1.5 % in a 64 d box), so the tolerance is
+/// 6 %. Also checks that the held bead has not moved.
+#[test]
+fn held_cylinder_drag_against_dennis_and_chang() {
+    let small = |eta: &str, name: &str| {
+        let o: Vec<String> = [
+            "fluid.grid=[128,128]",
+            "fibre.0.bead_radius=2.0",
+            "fibre.0.start=[48.0,63.5,0.0]",
+            "fluid.stream.sponge=8",
+            "time.steps=3000",
+            "output.interval=1000",
+            eta,
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        run_in_process(&config("fpd/cylinder_drag.toml"), &o, name)
+    };
+    let s = small("fluid.viscosity=0.02", "fpd-cylinder-re10");
+    assert!((s["derived"]["fluid.stream.reynolds"].as_f64().unwrap() - 10.0).abs() < 1e-9);
+    let (cd, reference) = metric(&s, "drag_coefficient");
+    assert_eq!(reference, 2.846);
+    println!("Re 10: C_D = {cd:.4} (Dennis & Chang {reference})");
+    assert!(
+        (cd / reference - 1.0).abs() < 0.06,
+        "C_D {cd} vs {reference}"
+    );
+    let dir = root()
+        .join("target")
+        .join("test-runs")
+        .join(format!("fpd-cylinder-re10-{}", std::process::id()));
+    let states = read_topic(&dir.join("run.mcap"), "/fibre/bead_states").unwrap();
+    for st in &states {
+        let b = &st["states"][0];
+        assert_eq!(
+            (b[0].as_f64().unwrap(), b[1].as_f64().unwrap()),
+            (48.0, 63.5),
+            "the held bead moved"
+        );
+    }
+    let s20 = small("fluid.viscosity=0.01", "fpd-cylinder-re20");
+    let (cd20, reference20) = metric(&s20, "drag_coefficient");
+    println!("Re 20: C_D = {cd20:.4} (Dennis & Chang {reference20})");
+    assert!(
+        (cd20 / reference20 - 1.0).abs() < 0.06,
+        "C_D {cd20} vs {reference20}"
+    );
+}

@@ -12,6 +12,7 @@ pub const KNOWN: &[&str] = &[
     "twist_angle",
     "couette_max_error",
     "drag_ratio",
+    "drag_coefficient",
     "tumbling_period_gamma",
     "min_end_to_end_over_length",
     "orbit",
@@ -232,6 +233,7 @@ pub fn compute(
                  the wall-speed difference",
             ),
             "drag_ratio" => drag_ratio(ctx)?,
+            "drag_coefficient" => drag_coefficient(ctx)?,
             "surface_tension" | "contact_angle_deg" => {
                 crate::capillary_metrics::capillary_metric(name, ctx.diagnostics, ctx.derived)?
             }
@@ -375,6 +377,60 @@ fn orbit_metrics(ctx: &Context) -> Result<BTreeMap<&'static str, Metric>, String
     };
     out.insert("stuck_angle_deg", stuck);
     Ok(out)
+}
+
+/// Drag coefficient `C_D = F / (rho U^2 d / 2)` of the beads held in a uniform stream
+/// (`[fluid.stream]`, fpd-lbm; S2023 Fig. 4): F is minus the total force the fibre node put
+/// on the beads at the last step (the holding force, which balances the drag once steady),
+/// d = 2 a of fibre 0, Re = U d / nu as the fluid node derived it.
+fn drag_coefficient(ctx: &Context) -> Result<Metric, String> {
+    let need = |list: &[(String, f64)], key: &str| {
+        lookup(list, key).ok_or_else(|| {
+            format!(
+                "metric `drag_coefficient` needs a uniform stream past held beads \
+                 ([fluid.stream] with fluid.method = \"fpd-lbm\"; missing `{key}`)"
+            )
+        })
+    };
+    let u = need(ctx.derived, "fluid.stream.velocity")?;
+    let re = need(ctx.derived, "fluid.stream.reynolds")?;
+    let held = need(ctx.diagnostics, "total_bead_force_x")?;
+    let fluid = ctx
+        .scene
+        .fluid
+        .as_ref()
+        .ok_or("metric `drag_coefficient` needs a fluid")?;
+    let rho = match fluid.get("density") {
+        Some(v) => v
+            .as_float()
+            .or(v.as_integer().map(|i| i as f64))
+            .unwrap_or(1.0),
+        None => 1.0,
+    };
+    let a = ctx
+        .scene
+        .fibre
+        .first()
+        .and_then(|f| f.get("bead_radius"))
+        .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+        .ok_or("metric `drag_coefficient` needs fibre 0's bead_radius")?;
+    let cd = -held / (0.5 * rho * u * u.abs() * 2.0 * a);
+    let mut m = match crate::reference::cylinder::drag_coefficient(re) {
+        Some((reference, source)) => Metric::with_reference(cd, reference, source),
+        None => {
+            let mut m = plain(cd);
+            m.note = format!(
+                "no reference at Re = {re}: Dennis & Chang give Re 10, 20, 40, Lamb's law holds \
+                 for Re <= 1"
+            );
+            m
+        }
+    };
+    m.extra.insert("reynolds".into(), re);
+    if let Some(b) = lookup(ctx.derived, "fluid.stream.blockage") {
+        m.extra.insert("blockage".into(), b);
+    }
+    Ok(m)
 }
 
 /// Drag on fibre 0's first bead held fixed in a periodic box driven by a body force, over the

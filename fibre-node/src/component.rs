@@ -195,7 +195,7 @@ impl Component for FibreComponent {
                 param("fibre.N.start", len, Some("[0.0, 0.0, 0.0]"), "position of bead 0"),
                 param("fibre.N.direction", "1", Some("[1.0, 0.0, 0.0]"), "direction of the straight initial fibre (normalised; z = 0 in 2D)"),
                 param("fibre.N.spacing", len, Some("2 bead_radius"), "initial and rest distance between neighbouring beads"),
-                param("fibre.N.clamp", "1", Some("[]"), "indices of clamped beads (negative counts from the end): fixed position and orientation"),
+                param("fibre.N.clamp", "1", Some("[]"), "indices of clamped beads (negative counts from the end): fixed position and orientation; under fpd-lbm held in place by a proportional-integral force (its steady value is minus the drag)"),
                 param("fibre.N.loads", "1", Some("[]"), "constant point loads: tables { bead, force, torque }"),
                 param("fibre.N.loads.M.bead", "1", None, "bead index (negative counts from the end)"),
                 param("fibre.N.loads.M.force", "mass length / time^2", Some("[0.0, 0.0, 0.0]"), "force, laboratory frame"),
@@ -258,8 +258,11 @@ impl Component for FibreComponent {
                 "FPD coupling (fluid.method = \"fpd-lbm\", S2023 section II C): fibre-forces \
                  publishes -dU/dR per bead; fibre-advance moves each bead by dt times the \
                  velocity the flow gave it (S2023 eq. 5), overdamped, without bead rotation. \
-                 Only bead-spring fibres, one sub-step, no clamps: the cohesive beam needs \
-                 bead rotations, which FPD does not give"
+                 Only bead-spring fibres, one sub-step: the cohesive beam needs bead \
+                 rotations, which FPD does not give. A clamped bead stays at its place, held \
+                 by a proportional-integral force on the velocity the flow gives it (a \
+                 dashpot plus a spring on the integrated velocity), so in a steady state the \
+                 holding force is minus the fluid's force on it"
                     .into(),
             ],
         }
@@ -280,7 +283,12 @@ impl Component for FibreComponent {
             if fpd {
                 check_fpd_fibre(n, cfg).map_err(ComponentError)?;
             }
-            let f = Fibre::straight(cfg, scene.dimensions, scene.coupling == Coupling::Spm);
+            let mut f = Fibre::straight(cfg, scene.dimensions, scene.coupling == Coupling::Spm);
+            if fpd && !cfg.clamp.is_empty() {
+                // The fluid mass a 2D FPD bead displaces, rho pi a^2.
+                let a = cfg.bead_radius;
+                f.hold_under_fpd(scene.fluid_density * std::f64::consts::PI * a * a, scene.dt);
+            }
             let lim = stability_limit(&f, cfg.substeps);
             let h = scene.dt / cfg.substeps as f64;
             // Under FPD the beads have no inertia of their own: the symplectic limit does not
@@ -582,12 +590,6 @@ fn check_fpd_fibre(n: usize, cfg: &crate::config::FibreConfig) -> Result<(), Str
             "fibre.{n}.substeps = {}: under fluid.method = \"fpd-lbm\" the beads move with the \
              flow, one position update per lattice step (S2023 section II C); set it to 1",
             cfg.substeps
-        ));
-    }
-    if !cfg.clamp.is_empty() {
-        return Err(format!(
-            "fibre.{n}.clamp: under fluid.method = \"fpd-lbm\" a bead goes where the flow \
-             takes it (S2023 eq. 5); hold it with fibre.{n}.loads instead"
         ));
     }
     Ok(())

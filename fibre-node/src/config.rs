@@ -77,6 +77,9 @@ pub struct SceneConfig {
     pub has_fluid: bool,
     /// How the fluid, if any, moves the fibres (from `fluid.method`).
     pub coupling: Coupling,
+    /// `fluid.density` (mass / length^dimensions, default 1): sets the gains that hold
+    /// clamped beads under FPD. The fluid node validates it.
+    pub fluid_density: f64,
     pub fibres: Vec<FibreConfig>,
 }
 
@@ -216,6 +219,12 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         Some(toml::Value::String(m)) if m == "fpd-lbm" => Coupling::Fpd,
         _ => Coupling::Spm,
     };
+    let fluid_density = table
+        .get("fluid")
+        .and_then(|f| f.get("density"))
+        .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+        .filter(|r| r.is_finite() && *r > 0.0)
+        .unwrap_or(1.0);
 
     let list = match table.get("fibre") {
         None => return Err(
@@ -264,6 +273,7 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         dt,
         has_fluid,
         coupling,
+        fluid_density,
         fibres,
     })
 }

@@ -104,6 +104,12 @@ pub struct Fibre {
     pub predicted_angular_impulse: Vec<Vec3>,
     /// Bead states at the start of the step, kept by the predictor for the corrector.
     pub start: Vec<BeadKinematics>,
+    /// Gains `[k_p, k_i]` of the force that holds the clamped beads under FPD (see
+    /// [`Fibre::hold_under_fpd`]); zero otherwise.
+    pub hold_gains: [f64; 2],
+    /// Under FPD, the displacement each clamped bead would have made, `sum dt V`: the
+    /// extension of the holding spring.
+    pub held_displacement: Vec<Vec3>,
     /// Scratch for the internal damping (allocated only when it is on).
     probe: Option<Box<DampingProbe>>,
 }
@@ -238,6 +244,8 @@ impl Fibre {
             hydrodynamic: with_fluid,
             predicted_impulse: vec![Vec3::zeros(); n],
             predicted_angular_impulse: vec![Vec3::zeros(); n],
+            hold_gains: [0.0; 2],
+            held_displacement: vec![Vec3::zeros(); n],
             probe: if cfg.internal_damping > 0.0 {
                 Some(Box::new(DampingProbe::new(n)))
             } else {
@@ -500,19 +508,44 @@ impl Fibre {
     }
 
     /// FPD step 1 (S2023 section II C): the forces on the beads at the current positions,
-    /// `F_i = -dU/dR_i` (S2023 eqs. 10-12) plus the point loads, into `force`.
+    /// `F_i = -dU/dR_i` (S2023 eqs. 10-12) plus the point loads, into `force`; clamped beads
+    /// get the holding force of [`Fibre::hold_under_fpd`] on top.
     pub fn fpd_forces(&mut self) {
         self.compute_forces();
+        let [kp, ki] = self.hold_gains;
+        for k in 0..self.pos.len() {
+            if self.clamped[k] {
+                self.force[k] -= kp * self.vel[k] + ki * self.held_displacement[k];
+            }
+        }
+    }
+
+    /// Hold the clamped beads under FPD. S2023 moves a bead only by a force (eq. 5), so a
+    /// bead is held at its place by a proportional-integral force on the velocity the flow
+    /// gives it, `F = -k_p V - k_i sum dt V`: a dashpot plus a spring whose extension is the
+    /// integrated velocity. In a steady state `V = 0` and `F` is minus the fluid's force on
+    /// the bead exactly, so the held bead measures its drag. `mass` is the fluid mass the
+    /// bead displaces (rho pi a^2 in 2D); `k_p = mass / (2 dt)` removes half of a velocity
+    /// error per step, `k_i = mass / (20 dt^2)` keeps the spring slower than the dashpot (a
+    /// damped response).
+    pub fn hold_under_fpd(&mut self, mass: f64, dt: f64) {
+        self.hold_gains = [0.5 * mass / dt, 0.05 * mass / (dt * dt)];
     }
 
     /// FPD step 3 (S2023 section II C): `R^{n+1} = R^n + dt V^{n+1}`, with the bead
     /// velocities `V^{n+1}` the flow gave (S2023 eq. 5, read from `velocities[k].velocity`),
-    /// which become the beads' velocities. Overdamped: no mass, no rotation.
+    /// which become the beads' velocities. Overdamped: no mass, no rotation. Clamped beads
+    /// stay where they are (see [`Fibre::hold_under_fpd`]).
     pub fn fpd_advance(&mut self, dt: f64, velocities: &[BeadState]) {
         for (k, v) in velocities.iter().enumerate().take(self.pos.len()) {
             let v = Vec3::from(v.velocity);
             self.vel[k] = v;
-            self.pos[k] += dt * v;
+            if self.clamped[k] {
+                // Held in place: the motion goes into the holding spring instead.
+                self.held_displacement[k] += dt * v;
+            } else {
+                self.pos[k] += dt * v;
+            }
         }
     }
 
@@ -572,6 +605,34 @@ mod tests {
         let (m, i) = bead_mass_inertia(2.0, 3.0, true);
         assert!((m - 2.0 * PI * 9.0).abs() < 1e-12);
         assert!((i - 0.5 * m * 9.0).abs() < 1e-12);
+    }
+
+    /// Under FPD a clamped bead stays put and is pushed back by `-k_p V - k_i sum dt V`,
+    /// while a free bead of the same fibre moves with the flow (S2023 eq. 5).
+    #[test]
+    fn clamped_bead_is_held_by_a_proportional_integral_force() {
+        let mut f = fibre(
+            "dimensions = 2\n[time]\ndt = 1\n[fluid]\nmethod = \"fpd-lbm\"\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = 2\nbead_radius = 2\nyoungs_modulus = 1\nclamp = [0]\n",
+        );
+        let mass = PI * 4.0;
+        f.hold_under_fpd(mass, 1.0);
+        let start = f.pos.clone();
+        let flow = |v: [f64; 3]| cosim::BeadState {
+            velocity: v,
+            ..Default::default()
+        };
+        let v = [[0.01, -0.002, 0.0], [0.03, 0.0, 0.0]];
+        for n in 1..=3 {
+            f.fpd_advance(1.0, &[flow(v[0]), flow(v[1])]);
+            f.fpd_forces();
+            assert_eq!(f.pos[0], start[0], "the clamped bead moved");
+            assert!((f.pos[1] - start[1] - n as f64 * Vec3::from(v[1])).norm() < 1e-15);
+            let want =
+                -(0.5 * mass) * Vec3::from(v[0]) - (0.05 * mass) * (n as f64) * Vec3::from(v[0]);
+            // The bond's forces cancel in the sum: what is left is the holding force.
+            let held = f.force[0] + f.force[1];
+            assert!((held - want).norm() < 1e-12, "{held} vs {want}");
+        }
     }
 
     #[test]

@@ -5,16 +5,16 @@
 //! ```sh
 //! cargo run --release -p fluid-node --example fpd_cylinder_drag -- \
 //!     [re=10,20,40] [d=10] [height=20] [length=30] [u=0.05] [reta=50] [rxi=0.0125] \
-//!     [walls=1] [sponge=4] [max_time=150] [tol=1e-4]
+//!     [walls=1] [sponge=4] [upstream=8] [max_time=150] [tol=1e-4]
 //! ```
 //!
-//! Lengths `height`, `length` and `sponge` are in diameters, `max_time` in d / U; `re` is a
+//! Lengths `height`, `length`, `sponge` and `upstream` are in diameters, `max_time` in d / U; `re` is a
 //! comma-separated list. S2023 Fig. 4 uses r_eta = 50 and r_xi = 0.0125, the defaults.
 //!
 //! Set-up (lattice units). The lattice is periodic in x; across y it is closed by walls
 //! sliding at the stream speed U (`walls=1`, the far field seen from the cylinder; blockage
 //! d / H) or periodic (`walls=0`, a column of cylinders H apart). The cylinder sits 8 d
-//! downstream of the inlet. A sponge of `sponge` diameters at the end of the box, upstream
+//! downstream of the inlet (`upstream`). A sponge of `sponge` diameters at the end of the box, upstream
 //! of the inlet through the periodic wrap, forces the flow back to the uniform stream:
 //! f = sigma(x) rho (U - u), sigma rising smoothly to 0.1 per step, so the wake does not
 //! re-enter.
@@ -61,6 +61,7 @@ struct Case {
     rxi: f64,
     walls: bool,
     sponge: f64,
+    upstream: f64,
     max_time: f64,
     tol: f64,
 }
@@ -83,7 +84,7 @@ fn run(case: &Case, re: f64) -> Result<(f64, f64, u64, f64, usize), String> {
     let mut fpd = FpdCoupling::new(cfg, &mut lat, 1).map_err(|e| e.to_string())?;
     lat.initialize_with(|_, _| (1.0, u, 0.0))?;
     // Centre of the channel, whose walls lie at y = -1/2 and ny - 1/2.
-    let anchor = [[8.0 * d, 0.5 * ny as f64 - 0.5]];
+    let anchor = [[case.upstream * d, 0.5 * ny as f64 - 0.5]];
     fpd.apply(&mut lat, &anchor, &[[0.0; 2]])
         .map_err(|e| e.to_string())?;
     let mass = fpd.profile_volume(0);
@@ -165,6 +166,7 @@ fn main() {
         rxi: num("rxi", 0.0125),
         walls: num("walls", 1.0) != 0.0,
         sponge: num("sponge", 4.0),
+        upstream: num("upstream", 8.0),
         max_time: num("max_time", 150.0),
         tol: num("tol", 1e-4),
     };

@@ -18,6 +18,9 @@ use cosim::scene_keys::{self, deserialize_at};
 use cosim::{BeadForce, BeadState, ComponentError, Configured, Exchange, PhaseReport, Port};
 use serde::Deserialize;
 
+mod uniform_stream;
+pub use uniform_stream::{UniformStream, DEFAULT_SPONGE_RATE};
+
 /// Largest accepted wall Mach number |u_w| / c_s (c_s = 1/sqrt 3): the lattice's
 /// compressibility error grows as Ma^2, and S2023-type runs stay far below this.
 pub const MAX_WALL_MACH: f64 = 0.3;
@@ -40,6 +43,7 @@ struct RawFluid {
     profile_cutoff: Option<f64>,
     initial_velocity: Option<String>,
     solid_layers: Option<RawLayers>,
+    stream: Option<uniform_stream::RawStream>,
 }
 
 #[derive(Deserialize)]
@@ -105,6 +109,8 @@ pub struct FpdScene {
     pub bending_stiffness: Vec<Option<f64>>,
     /// `[fluid.solid_layers]`: S2023's Couette sandwich (scenes without fibres).
     pub solid_layers: Option<SolidLayers>,
+    /// `[fluid.stream]`: a uniform stream with a sponge (drag of held bodies).
+    pub stream: Option<UniformStream>,
 }
 
 /// Read and check the FPD part of a scene.
@@ -231,6 +237,19 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
             })
         }
     };
+    let stream = match raw.stream {
+        None => None,
+        Some(r) => {
+            if couette_start || solid_layers.is_some() {
+                return Err(
+                    "fluid.stream: a uniform stream starts at the stream velocity; \
+                            remove fluid.initial_velocity and fluid.solid_layers"
+                        .into(),
+                );
+            }
+            Some(UniformStream::new(r, nx, walls, MAX_WALL_MACH)?)
+        }
+    };
     Ok(FpdScene {
         nx,
         ny,
@@ -242,6 +261,7 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
         beads,
         bending_stiffness,
         solid_layers,
+        stream,
     })
 }
 
@@ -298,6 +318,11 @@ impl FpdRun {
                 })
                 .map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?;
         }
+        if let Some(s) = &scene.stream {
+            lattice
+                .initialize_with(|_, _| (scene.density, s.velocity, 0.0))
+                .map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?;
+        }
         let total_beads: usize = scene.beads.iter().sum();
         let coupling = if total_beads > 0 {
             Some(
@@ -320,6 +345,16 @@ impl FpdRun {
             ),
             ("fluid.interface_thickness".into(), scene.coupling.xi()),
         ];
+        if let Some(s) = &scene.stream {
+            let d = 2.0 * scene.coupling.radius;
+            derived.push(("fluid.stream.velocity".into(), s.velocity));
+            derived.push(("fluid.stream.sponge".into(), s.width as f64));
+            if total_beads > 0 {
+                // Re = U d / nu of a bead (the cylinder of S2023 Fig. 4), blockage d / H.
+                derived.push(("fluid.stream.reynolds".into(), s.velocity.abs() * d / nu));
+                derived.push(("fluid.stream.blockage".into(), d / scene.ny as f64));
+            }
+        }
         let mut active = Vec::new();
         if total_beads > 0 {
             active.push(cosim::effects::HYDRODYNAMICS.to_string());
@@ -412,6 +447,15 @@ impl FpdRun {
                 fx += f[0];
                 fy += f[1];
             }
+            if let Some(s) = &self.scene.stream {
+                let reach = c.config().reach();
+                for (k, p) in self.positions.iter().enumerate() {
+                    s.check_clear(k, p[0], reach, self.scene.nx).map_err(|e| {
+                        ComponentError(format!("fluid (fpd-lbm): step {step}: {e}"))
+                    })?;
+                }
+                s.apply(&mut self.lattice);
+            }
             c.apply(&mut self.lattice, &self.positions, &self.force2)
                 .map_err(fail)?;
             self.lattice.step();
@@ -426,6 +470,9 @@ impl FpdRun {
             }
             exchange.publish_states(Port::BeadVelocities, step + 1, &self.out)?;
         } else {
+            if let Some(s) = &self.scene.stream {
+                s.apply(&mut self.lattice);
+            }
             self.lattice.step();
         }
         let mach = self.lattice.max_mach();
@@ -453,12 +500,13 @@ impl FpdRun {
     /// Largest deviation of the row-averaged x-velocity from the Couette profile between the
     /// wall planes (linear, or S2023 eq. 13 with solid layers), over |top - bottom|.
     fn couette_error(&mut self, b: f64, t: f64) -> f64 {
-        self.lattice.velocity(&mut self.ux, &mut self.uy);
-        let (nx, ny) = (self.scene.nx, self.scene.ny);
         let du = (t - b).abs();
         if du == 0.0 {
+            // No shear (walls at rest, or sliding with a uniform stream): nothing to compare.
             return 0.0;
         }
+        self.lattice.velocity(&mut self.ux, &mut self.uy);
+        let (nx, ny) = (self.scene.nx, self.scene.ny);
         let mut worst: f64 = 0.0;
         for y in 0..ny {
             let mean = self.ux[y * nx..(y + 1) * nx].iter().sum::<f64>() / nx as f64;

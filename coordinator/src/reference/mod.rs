@@ -1,4 +1,5 @@
 //! Analytic and published references the metrics are compared with.
+pub mod cylinder;
 pub mod elastica;
 pub mod jeffery;
 pub mod periodic_array;
