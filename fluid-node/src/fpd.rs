@@ -165,6 +165,12 @@ pub struct FpdCoupling {
     phi: Vec<f64>,
     /// Nodes whose force the last spread wrote (with repeats where boxes overlap).
     touched: Vec<usize>,
+    /// Nodes whose phi the last [`FpdCoupling::place`] may have changed: the previous and
+    /// the new boxes (with repeats), where eq. 1 has to be re-evaluated.
+    changed: Vec<usize>,
+    /// Whether the lattice's viscosity field already holds eq. 1 of the placed phi outside
+    /// `changed` (set by the first full update).
+    viscosity_current: bool,
 }
 
 fn parameter(name: &'static str, value: f64, why: impl Into<String>) -> FpdError {
@@ -256,6 +262,8 @@ impl FpdCoupling {
             placed: false,
             phi: vec![0.0; nx * ny],
             touched: Vec::with_capacity(beads * extent * extent),
+            changed: Vec::with_capacity(2 * beads * extent * extent),
+            viscosity_current: false,
         })
     }
 
@@ -310,9 +318,13 @@ impl FpdCoupling {
             }
         }
         let nx = self.nx;
+        self.changed.clear();
         if self.placed {
             for b in &self.beads {
-                b.for_each(|x, y, _, _| self.phi[y * nx + x] = 0.0);
+                b.for_each(|x, y, _, _| {
+                    self.phi[y * nx + x] = 0.0;
+                    self.changed.push(y * nx + x);
+                });
             }
         }
         let (a, xi, reach) = (self.cfg.radius, self.cfg.xi(), self.cfg.reach());
@@ -333,23 +345,33 @@ impl FpdCoupling {
             b.for_each(|x, y, _, _| {
                 let v = &mut self.phi[y * nx + x];
                 *v = v.min(1.0);
+                self.changed.push(y * nx + x);
             });
         }
         self.placed = true;
         Ok(())
     }
 
-    /// Write eq. 1, nu = nu_f + (nu_s - nu_f) phi, into the lattice's viscosity field. The
-    /// solver's setter covers the whole lattice (it has no sparse one), an O(nx ny) pass.
-    pub fn update_viscosity(&self, lattice: &mut MrtD2q9) -> Result<(), FpdError> {
+    /// Write eq. 1, nu = nu_f + (nu_s - nu_f) phi, into the lattice's viscosity field: the
+    /// whole lattice the first time, then only the nodes of the previous and the new boxes
+    /// (elsewhere phi is 0 before and after). A caller that writes the viscosity field by
+    /// other means must call [`FpdCoupling::invalidate_viscosity`].
+    pub fn update_viscosity(&mut self, lattice: &mut MrtD2q9) -> Result<(), FpdError> {
         self.check_lattice(lattice)?;
-        lattice
-            .set_viscosity_from_fraction(
-                &self.phi,
-                self.cfg.fluid_viscosity,
-                self.cfg.solid_viscosity(),
-            )
-            .map_err(FpdError::Solver)
+        let (nu_f, nu_s) = (self.cfg.fluid_viscosity, self.cfg.solid_viscosity());
+        if self.viscosity_current {
+            lattice.set_viscosity_from_fraction_at(&self.changed, &self.phi, nu_f, nu_s)
+        } else {
+            lattice.set_viscosity_from_fraction(&self.phi, nu_f, nu_s)
+        }
+        .map_err(FpdError::Solver)?;
+        self.viscosity_current = self.placed;
+        Ok(())
+    }
+
+    /// The next [`FpdCoupling::update_viscosity`] rewrites the whole field.
+    pub fn invalidate_viscosity(&mut self) {
+        self.viscosity_current = false;
     }
 
     /// Write the force density of eq. 4 plus the background into the lattice's force field

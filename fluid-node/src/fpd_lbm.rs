@@ -277,8 +277,6 @@ pub struct FpdRun {
     force2: Vec<[f64; 2]>,
     velocities: Vec<[f64; 2]>,
     out: Vec<BeadState>,
-    ux: Vec<f64>,
-    uy: Vec<f64>,
 }
 
 impl FpdRun {
@@ -389,7 +387,6 @@ impl FpdRun {
                 }
             }
         }
-        let n = scene.nx * scene.ny;
         let run = FpdRun {
             lattice,
             coupling,
@@ -400,8 +397,6 @@ impl FpdRun {
             force2: vec![[0.0; 2]; total_beads],
             velocities: vec![[0.0; 2]; total_beads],
             out: Vec::with_capacity(total_beads),
-            ux: vec![0.0; n],
-            uy: vec![0.0; n],
             scene,
         };
         let configured = Configured {
@@ -475,7 +470,8 @@ impl FpdRun {
             }
             self.lattice.step();
         }
-        let mach = self.lattice.max_mach();
+        // Kept by the step itself (the flow it collided, the state at step n): no extra pass.
+        let mach = self.lattice.last_step_max_mach();
         if mach.is_nan() || mach > ABORT_MACH {
             return Err(ComponentError(format!(
                 "fluid (fpd-lbm): the flow's Mach number reached {mach:.3} at step {step} \
@@ -498,18 +494,19 @@ impl FpdRun {
     }
 
     /// Largest deviation of the row-averaged x-velocity from the Couette profile between the
-    /// wall planes (linear, or S2023 eq. 13 with solid layers), over |top - bottom|.
-    fn couette_error(&mut self, b: f64, t: f64) -> f64 {
+    /// wall planes (linear, or S2023 eq. 13 with solid layers), over |top - bottom|, for the
+    /// flow the last lattice step collided.
+    fn couette_error(&self, b: f64, t: f64) -> f64 {
         let du = (t - b).abs();
         if du == 0.0 {
             // No shear (walls at rest, or sliding with a uniform stream): nothing to compare.
             return 0.0;
         }
-        self.lattice.velocity(&mut self.ux, &mut self.uy);
-        let (nx, ny) = (self.scene.nx, self.scene.ny);
+        let ny = self.scene.ny;
         let mut worst: f64 = 0.0;
         for y in 0..ny {
-            let mean = self.ux[y * nx..(y + 1) * nx].iter().sum::<f64>() / nx as f64;
+            // Row means the step kept: the flow it collided (step n), no pass over the lattice.
+            let mean = self.lattice.last_step_row_mean_ux(y);
             let z = y as f64 + 0.5;
             let exact = match self.scene.solid_layers {
                 Some(l) => l.exact(z, ny as f64, b, t),

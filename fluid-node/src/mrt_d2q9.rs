@@ -38,7 +38,7 @@
 pub mod kernel;
 
 use crate::parallel::{min_len, ordered_sum, per_row};
-use kernel::{collide, macroscopic, C, OPP, Q, W};
+use kernel::{collide_with_velocity, macroscopic, C, OPP, Q, W};
 pub use kernel::{s_nu, s_q, FixedRates};
 use rayon::prelude::*;
 
@@ -216,7 +216,27 @@ fn run(src: &[f64], start: usize, m: usize) -> &[f64] {
     &src[start..start + m]
 }
 
-/// Stream and collide row `y` into `dst` (its nine sub-rows).
+/// Flow statistics of one row, gathered by the step from the velocities its collisions
+/// used: the largest |u|^2 (NaN if any node was NaN) and the sum of u_x along the row.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct RowStats {
+    max_speed_sq: f64,
+    sum_ux: f64,
+}
+
+impl RowStats {
+    #[inline(always)]
+    fn add(&mut self, ux: f64, uy: f64) {
+        let u2 = ux * ux + uy * uy;
+        // NaN sticks: `u2 > NaN` is false, and a NaN u2 replaces the maximum.
+        if u2 > self.max_speed_sq || u2.is_nan() {
+            self.max_speed_sq = u2;
+        }
+        self.sum_ux += ux;
+    }
+}
+
+/// Stream and collide row `y` into `dst` (its nine sub-rows); returns the row's statistics.
 #[allow(clippy::too_many_arguments)]
 fn step_row(
     geo: Geometry,
@@ -227,24 +247,31 @@ fn step_row(
     nu: &[f64],
     fx: &[f64],
     fy: &[f64],
-) {
+) -> RowStats {
     let nx = geo.nx;
     let store = |x: usize, p: &[f64; Q], dst: &mut [f64]| {
         for (i, v) in p.iter().enumerate() {
             dst[i * nx + x] = *v;
         }
     };
+    let mut stats = RowStats::default();
     if geo.is_wall_row(y) || nx < 3 {
         for x in 0..nx {
             let f = geo.gather(src, x, y);
-            store(x, &collide(&f, geo.rho0, nu[x], fx[x], fy[x], fixed), dst);
+            let (p, ux, uy) = collide_with_velocity(&f, geo.rho0, nu[x], fx[x], fy[x], fixed);
+            store(x, &p, dst);
+            stats.add(ux, uy);
         }
-        return;
+        return stats;
     }
-    // The two edge columns wrap in x; the others read shifted contiguous runs.
+    // The two edge columns wrap in x; the others read shifted contiguous runs. The sum of
+    // u_x runs over x = 0, nx - 1, then 1..nx - 1: a fixed order, so the same bits on any
+    // number of threads.
     for x in [0, nx - 1] {
         let f = geo.gather(src, x, y);
-        store(x, &collide(&f, geo.rho0, nu[x], fx[x], fy[x], fixed), dst);
+        let (p, ux, uy) = collide_with_velocity(&f, geo.rho0, nu[x], fx[x], fy[x], fixed);
+        store(x, &p, dst);
+        stats.add(ux, uy);
     }
     let m = nx - 2;
     let ym = Geometry::wrap(geo.ny, y, -1);
@@ -269,11 +296,13 @@ fn step_row(
         let f = [
             a0[k], a1[k], a2[k], a3[k], a4[k], a5[k], a6[k], a7[k], a8[k],
         ];
-        let p = collide(&f, geo.rho0, nu[k], fx[k], fy[k], fixed);
+        let (p, ux, uy) = collide_with_velocity(&f, geo.rho0, nu[k], fx[k], fy[k], fixed);
         for i in 0..Q {
             d[i][k] = p[i];
         }
+        stats.add(ux, uy);
     }
+    stats
 }
 
 /// The MRT D2Q9 solver: two lattices of populations, the viscosity and force fields.
@@ -292,6 +321,8 @@ pub struct MrtD2q9 {
     fy: Vec<f64>,
     /// Per-row partial sums of the deterministic reductions.
     row_sums: Vec<f64>,
+    /// Per-row flow statistics of the last step (zero before the first).
+    row_stats: Vec<RowStats>,
     time: u64,
 }
 
@@ -347,6 +378,7 @@ impl MrtD2q9 {
             fx: vec![0.0; nodes],
             fy: vec![0.0; nodes],
             row_sums: Vec::with_capacity(ny),
+            row_stats: vec![RowStats::default(); ny],
             time: 0,
         };
         s.initialize_with(|_, _| (density, 0.0, 0.0))?;
@@ -434,6 +466,40 @@ impl MrtD2q9 {
             .zip(phi.par_iter())
             .with_min_len(min * self.geo.nx)
             .for_each(|(n, &p)| *n = nu_f + (nu_s - nu_f) * p);
+        Ok(())
+    }
+
+    /// [`MrtD2q9::set_viscosity_from_fraction`] at the listed nodes only (`[y][x]` indices,
+    /// repeats allowed); the rest of the field is left as it is.
+    pub fn set_viscosity_from_fraction_at(
+        &mut self,
+        nodes: &[usize],
+        phi: &[f64],
+        nu_f: f64,
+        nu_s: f64,
+    ) -> Result<(), String> {
+        self.check_len("solid fraction", phi.len())?;
+        check_viscosity(nu_f)?;
+        check_viscosity(nu_s)?;
+        let n = self.nu.len();
+        if let Some(&k) = nodes
+            .iter()
+            .find(|&&k| k >= n || !(0.0..=1.0).contains(&phi[k]))
+        {
+            return Err(if k >= n {
+                format!("node index {k} is outside the lattice of {n} nodes")
+            } else {
+                format!(
+                    "solid fraction {} at node ({}, {}) is outside [0, 1]",
+                    phi[k],
+                    k % self.geo.nx,
+                    k / self.geo.nx
+                )
+            });
+        }
+        for &k in nodes {
+            self.nu[k] = nu_f + (nu_s - nu_f) * phi[k];
+        }
         Ok(())
     }
 
@@ -560,11 +626,12 @@ impl MrtD2q9 {
         let (nu, fx, fy) = (&self.nu[..], &self.fx[..], &self.fy[..]);
         self.g
             .par_chunks_mut(Q * nx)
+            .zip(self.row_stats.par_iter_mut())
             .enumerate()
             .with_min_len(min_len(geo.ny, nx))
-            .for_each(|(y, dst)| {
+            .for_each(|(y, (dst, stats))| {
                 let r = y * nx..(y + 1) * nx;
-                step_row(
+                *stats = step_row(
                     geo,
                     fixed,
                     src,
@@ -704,6 +771,30 @@ impl MrtD2q9 {
             .reduce(|| 0.0, nan_max)
     }
 
+    /// Largest |u| of the flow the last [`MrtD2q9::step`] collided (the state at the start
+    /// of that step, u = (j + F/2) / rho), kept by the step itself: O(ny), no pass over the
+    /// lattice. NaN if any node was NaN; 0 before the first step.
+    pub fn last_step_max_speed(&self) -> f64 {
+        let mut m: f64 = 0.0;
+        for s in &self.row_stats {
+            if s.max_speed_sq > m || s.max_speed_sq.is_nan() {
+                m = s.max_speed_sq;
+            }
+        }
+        m.sqrt()
+    }
+
+    /// [`MrtD2q9::last_step_max_speed`] over c_s = 1/sqrt(3).
+    pub fn last_step_max_mach(&self) -> f64 {
+        self.last_step_max_speed() * 3f64.sqrt()
+    }
+
+    /// Mean u_x along row y of the flow the last step collided (see
+    /// [`MrtD2q9::last_step_max_speed`]).
+    pub fn last_step_row_mean_ux(&self, y: usize) -> f64 {
+        self.row_stats[y].sum_ux / self.geo.nx as f64
+    }
+
     /// Largest Mach number, max |u| / c_s with c_s = 1/sqrt(3).
     pub fn max_mach(&self) -> f64 {
         self.max_speed() * 3f64.sqrt()
@@ -725,6 +816,7 @@ impl MrtD2q9 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use kernel::collide;
 
     fn walls(nx: usize, ny: usize, nu: f64, u: [f64; 2]) -> MrtD2q9 {
         let b = YBoundary::Walls {
@@ -732,6 +824,37 @@ mod tests {
             top: u[1],
         };
         MrtD2q9::new(MrtConfig::new(nx, ny, b, nu)).unwrap()
+    }
+
+    /// The statistics the step keeps are those of the flow it collided: the same as a pass
+    /// over the lattice before the step (largest speed, row means of u_x), to round-off;
+    /// and a NaN anywhere shows in the maximum.
+    #[test]
+    fn step_keeps_the_statistics_of_the_flow_it_collided() {
+        let (nx, ny) = (23, 17);
+        let mut lat = walls(nx, ny, 0.1, [-0.02, 0.03]);
+        let n = nx * ny;
+        let fx: Vec<f64> = (0..n).map(|k| 1e-5 * ((k % 7) as f64 - 3.0)).collect();
+        let fy: Vec<f64> = (0..n).map(|k| 2e-5 * ((k % 5) as f64 - 2.0)).collect();
+        lat.set_force(&fx, &fy).unwrap();
+        assert_eq!(lat.last_step_max_speed(), 0.0);
+        lat.run(40);
+        let (mut ux, mut uy) = (vec![0.0; n], vec![0.0; n]);
+        lat.velocity(&mut ux, &mut uy);
+        let before = lat.max_speed();
+        lat.step();
+        assert!((lat.last_step_max_speed() - before).abs() <= 1e-15 * before);
+        assert!((lat.last_step_max_mach() - before * 3f64.sqrt()).abs() <= 1e-15);
+        for y in 0..ny {
+            let mean = ux[y * nx..(y + 1) * nx].iter().sum::<f64>() / nx as f64;
+            assert!(
+                (lat.last_step_row_mean_ux(y) - mean).abs() < 1e-16,
+                "row {y}"
+            );
+        }
+        lat.force_mut().0[5 * nx + 9] = f64::NAN;
+        lat.step();
+        assert!(lat.last_step_max_speed().is_nan());
     }
 
     /// Bad configurations are errors, not panics.

@@ -546,3 +546,35 @@ fn per_step_calls_do_not_allocate() {
         assert_eq!(after - before, 0, "allocations in per-step calls");
     });
 }
+
+/// After the first full write, `update_viscosity` touches only the previous and new boxes;
+/// the field it leaves must equal eq. 1 evaluated everywhere, bit for bit, as beads move
+/// (wrapping in x, overlapping each other).
+#[test]
+fn sparse_viscosity_update_equals_a_full_rebuild() {
+    let (nx, ny) = (48, 40);
+    let mut lat = channel(nx, ny, 0.1, 0.0, 0.0);
+    let cfg = FpdConfig::new(3.0, 0.1);
+    let mut c = FpdCoupling::new(cfg, &mut lat, 3).unwrap();
+    let mut full = channel(nx, ny, 0.1, 0.0, 0.0);
+    for n in 0..12 {
+        let t = n as f64;
+        let pos = [
+            [5.0 + 3.7 * t, 20.0],
+            [9.0 + 3.7 * t, 21.5 - 0.5 * t],
+            [46.0 - 2.1 * t, 8.0 + 1.3 * t],
+        ];
+        c.place(&pos).unwrap();
+        c.update_viscosity(&mut lat).unwrap();
+        full.set_viscosity_from_fraction(
+            c.solid_fraction(),
+            cfg.fluid_viscosity,
+            cfg.solid_viscosity(),
+        )
+        .unwrap();
+        assert!(
+            lat.viscosity() == full.viscosity(),
+            "step {n}: the sparse update differs from the full one"
+        );
+    }
+}

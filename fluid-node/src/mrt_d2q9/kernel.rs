@@ -206,6 +206,20 @@ pub struct FixedRates {
 /// since j_eq = j + F/2.
 #[inline(always)]
 pub fn collide(fd: &[f64; Q], rho0: f64, nu: f64, fx: f64, fy: f64, fixed: FixedRates) -> [f64; Q] {
+    collide_with_velocity(fd, rho0, nu, fx, fy, fixed).0
+}
+
+/// [`collide`], also returning the node's velocity `u = (j + F/2) / rho` that the collision
+/// used, so that a step can keep flow statistics without a second pass over the lattice.
+#[inline(always)]
+pub fn collide_with_velocity(
+    fd: &[f64; Q],
+    rho0: f64,
+    nu: f64,
+    fx: f64,
+    fy: f64,
+    fixed: FixedRates,
+) -> ([f64; Q], f64, f64) {
     let m = moments(fd);
     let drho = m[0];
     let rho = rho0 + drho;
@@ -225,7 +239,11 @@ pub fn collide(fd: &[f64; Q], rho0: f64, nu: f64, fx: f64, fy: f64, fixed: Fixed
     let hn = 1.0 - 0.5 * sn;
     let pxx = m[7] - sn * (m[7] - rho * (ux * ux - uy * uy)) + hn * 2.0 * (ux * fx - uy * fy);
     let pxy = m[8] - sn * (m[8] - rho * ux * uy) + hn * (ux * fy + uy * fx);
-    populations(&[drho, e, eps, m[3] + fx, qx, m[5] + fy, qy, pxx, pxy])
+    (
+        populations(&[drho, e, eps, m[3] + fx, qx, m[5] + fy, qy, pxx, pxy]),
+        ux,
+        uy,
+    )
 }
 
 #[cfg(test)]
