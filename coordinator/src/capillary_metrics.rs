@@ -11,21 +11,33 @@
 //!   ψ away from the meniscus), against Young's law with the 1D wall equilibria,
 //!   `cos θ_A = (σ_BS - σ_AS) / σ_AB` (derived `fibre.0.contact_angle_reference_deg`; L2020
 //!   eq. 44 measures the same angle through B, 180° - θ_A).
+//! - `laplace_pressure_jump`: the jump of the mechanical pressure across the surface of a
+//!   droplet, inside minus outside (diagnostic `pressure_jump`, which the fluid node
+//!   computes at reporting steps as `P_s + ψ μ_ψ + φ μ_φ - e0 f`, the projection pressure
+//!   plus the isotropic thermodynamic pressure of L2020 eqs. 28 and 33, averaged over the
+//!   bulk on either side), against the Laplace law σ_AB / R (2D) or 2 σ_AB / R (3D) with R
+//!   the droplet's equimolar radius measured from ψ at the same step (diagnostic
+//!   `droplet_radius`), not the initial one.
 use crate::metrics::{lookup, Metric};
 
 /// Metric names this module computes.
-pub const CAPILLARY_METRICS: &[&str] = &["surface_tension", "contact_angle_deg"];
+pub const CAPILLARY_METRICS: &[&str] = &[
+    "surface_tension",
+    "contact_angle_deg",
+    "laplace_pressure_jump",
+];
 
 fn with_reference(value: f64, reference: f64, source: &str) -> Metric {
     Metric::with_reference(value, reference, source)
 }
 
 /// The capillary metric `name` from the last step's `diagnostics` and the configured
-/// `derived` numbers, or what is missing.
+/// `derived` numbers of a scene of `dims` dimensions, or what is missing.
 pub fn capillary_metric(
     name: &str,
     diagnostics: &[(String, f64)],
     derived: &[(String, f64)],
+    dims: usize,
 ) -> Result<Metric, String> {
     let need = |list: &[(String, f64)], key: &str, what: &str| {
         lookup(list, key).ok_or_else(|| format!("metric `{name}` needs {what} (`{key}`)"))
@@ -74,6 +86,26 @@ pub fn capillary_metric(
             }
             Ok(m)
         }
+        "laplace_pressure_jump" => {
+            let what = "a droplet (fluid.binary.initial = \"droplet\") and a last step the \
+                        fluid node reports on (the last of time.steps)";
+            let jump = need(diagnostics, "pressure_jump", what)?;
+            let radius = need(diagnostics, "droplet_radius", what)?;
+            let sigma = need(derived, "fluid.binary.sigma", "a binary fluid")?;
+            // Curvature of a circle (2D) or a sphere (3D).
+            let curvature = (dims as f64 - 1.0) / radius;
+            let mut m = with_reference(
+                jump,
+                sigma * curvature,
+                "Laplace law, sigma_AB / R (2D) or 2 sigma_AB / R (3D), R the equimolar radius \
+                 of the droplet measured from psi at the last step",
+            );
+            m.extra.insert("droplet_radius".into(), radius);
+            if let Some(j) = lookup(diagnostics, "pressure_jump_mu") {
+                m.extra.insert("pressure_jump_mu".into(), j);
+            }
+            Ok(m)
+        }
         other => Err(format!("`{other}` is not a capillary metric")),
     }
 }
@@ -93,13 +125,13 @@ mod tests {
             ("fluid.binary.interface_area", 96.0),
             ("fluid.binary.sigma", 0.1),
         ]);
-        let m = capillary_metric("surface_tension", &d, &c).unwrap();
+        let m = capillary_metric("surface_tension", &d, &c, 2).unwrap();
         assert_eq!(m.value, 9.0 / 96.0);
         assert_eq!(m.reference, Some(0.1));
         assert!((m.relative_error.unwrap() - (0.1 - 0.09375) / 0.1).abs() < 1e-15);
-        let e = capillary_metric("surface_tension", &d, &c[1..]).unwrap_err();
+        let e = capillary_metric("surface_tension", &d, &c[1..], 2).unwrap_err();
         assert!(e.contains("fluid.binary.interface_area"), "{e}");
-        let e = capillary_metric("surface_tension", &[], &c).unwrap_err();
+        let e = capillary_metric("surface_tension", &[], &c, 2).unwrap_err();
         assert!(e.contains("free_energy"), "{e}");
     }
 
@@ -107,12 +139,32 @@ mod tests {
     fn contact_angle_against_the_wall_equilibria() {
         let d = list(&[("contact_angle_deg", 60.0), ("bead_height", 10.0)]);
         let c = list(&[("fibre.0.contact_angle_reference_deg", 62.0)]);
-        let m = capillary_metric("contact_angle_deg", &d, &c).unwrap();
+        let m = capillary_metric("contact_angle_deg", &d, &c, 2).unwrap();
         assert_eq!(m.value, 60.0);
         assert!((m.relative_error.unwrap() - 2.0 / 62.0).abs() < 1e-15);
         assert_eq!(m.extra.get("bead_height"), Some(&10.0));
-        let e = capillary_metric("contact_angle_deg", &d, &[]).unwrap_err();
+        let e = capillary_metric("contact_angle_deg", &d, &[], 2).unwrap_err();
         assert!(e.contains("fibre.0.contact_angle_reference_deg"), "{e}");
-        assert!(capillary_metric("drag_ratio", &d, &c).is_err());
+        assert!(capillary_metric("drag_ratio", &d, &c, 2).is_err());
+    }
+
+    #[test]
+    fn laplace_reference_is_sigma_times_the_curvature() {
+        let d = list(&[
+            ("pressure_jump", 0.02),
+            ("droplet_radius", 10.0),
+            ("pressure_jump_mu", 0.021),
+        ]);
+        let c = list(&[("fluid.binary.sigma", 0.2)]);
+        let m2 = capillary_metric("laplace_pressure_jump", &d, &c, 2).unwrap();
+        assert_eq!(m2.value, 0.02);
+        assert!((m2.reference.unwrap() - 0.02).abs() < 1e-15);
+        assert_eq!(m2.extra.get("droplet_radius"), Some(&10.0));
+        let m3 = capillary_metric("laplace_pressure_jump", &d, &c, 3).unwrap();
+        assert!((m3.reference.unwrap() - 0.04).abs() < 1e-15);
+        let e = capillary_metric("laplace_pressure_jump", &d[1..], &c, 2).unwrap_err();
+        assert!(e.contains("(`pressure_jump`)"), "{e}");
+        let e = capillary_metric("laplace_pressure_jump", &d, &[], 3).unwrap_err();
+        assert!(e.contains("fluid.binary.sigma"), "{e}");
     }
 }

@@ -21,6 +21,10 @@ pub const KNOWN: &[&str] = &[
     "stuck_angle_deg",
     "surface_tension",
     "contact_angle_deg",
+    "laplace_pressure_jump",
+    "final_tilt_deg",
+    "wrap",
+    "curvature_radius_over_droplet_radius",
 ];
 
 /// The orbit metrics (S2023 section IV), computed together by [`crate::orbit`].
@@ -169,13 +173,13 @@ fn fibre_zero<'a>(
     })
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
-fn norm(a: [f64; 3]) -> f64 {
+pub(crate) fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
 fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
@@ -234,8 +238,16 @@ pub fn compute(
             ),
             "drag_ratio" => drag_ratio(ctx)?,
             "drag_coefficient" => drag_coefficient(ctx)?,
-            "surface_tension" | "contact_angle_deg" => {
-                crate::capillary_metrics::capillary_metric(name, ctx.diagnostics, ctx.derived)?
+            "surface_tension" | "contact_angle_deg" | "laplace_pressure_jump" => {
+                crate::capillary_metrics::capillary_metric(
+                    name,
+                    ctx.diagnostics,
+                    ctx.derived,
+                    ctx.scene.dimensions.into(),
+                )?
+            }
+            n if crate::interface_metrics::INTERFACE_METRICS.contains(&n) => {
+                crate::interface_metrics::interface_metric(n, ctx)?
             }
             "tumbling_period_gamma" => {
                 let gamma = lookup(ctx.derived, "fluid.shear_rate")

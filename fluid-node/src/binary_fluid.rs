@@ -18,6 +18,7 @@
 //! the walls), set once when every solid has the same affinity. Everything is allocated in
 //! [`BinaryFluid::new`]; the two calls above allocate nothing.
 pub mod derived;
+pub mod droplet;
 pub mod scene;
 
 use crate::cahn_hilliard::{
@@ -32,7 +33,8 @@ pub use scene::{BinaryConfig, InitialPsi};
 
 /// Diagnostics after `fluid-phase-field`, in their fixed order; with a flat initial
 /// interface [`INTERFACE_DIAGNOSTICS`] follow, and with beads besides
-/// [`CONTACT_ANGLE_DIAGNOSTICS`].
+/// [`CONTACT_ANGLE_DIAGNOSTICS`]; with an initial droplet, at reporting steps,
+/// [`droplet::DROPLET_DIAGNOSTICS`].
 pub const PHASE_FIELD_DIAGNOSTICS: [&str; 3] = ["mean_psi", "max_abs_psi", "free_energy"];
 /// Position of the flat interface (along its normal, grid units) away from bead 0.
 pub const INTERFACE_DIAGNOSTICS: [&str; 1] = ["interface_position"];
@@ -75,6 +77,10 @@ pub struct BinaryFluid {
     uniform: bool,
     /// Capillary force density per component (mass / (length² time²)).
     force: Vec<Vec<f64>>,
+    /// The steps whose diagnostics the coordinator logs (droplet diagnostics only then).
+    reporting: droplet::Reporting,
+    /// Scratch of the droplet diagnostics, allocated at the first reporting step.
+    droplet: Option<droplet::Scratch>,
 }
 
 impl BinaryFluid {
@@ -136,7 +142,14 @@ impl BinaryFluid {
             bead_psi_star,
             wall_psi_star,
             uniform,
+            reporting: droplet::Reporting::default(),
+            droplet: None,
         })
+    }
+
+    /// Compute the whole-field droplet diagnostics only at the steps `reporting` names.
+    pub fn set_reporting(&mut self, reporting: droplet::Reporting) {
+        self.reporting = reporting;
     }
 
     pub fn config(&self) -> &BinaryConfig {
@@ -232,9 +245,9 @@ impl BinaryFluid {
         &self.force
     }
 
-    /// Diagnostics after `fluid-phase-field` (names and values, see
+    /// Diagnostics after `fluid-phase-field` of step `step` (names and values, see
     /// [`PHASE_FIELD_DIAGNOSTICS`]); `spm` gives bead 0 for the contact angle.
-    pub fn report(&mut self, spm: &Spm) -> Vec<(String, f64)> {
+    pub fn report(&mut self, spm: &Spm, step: u64) -> Vec<(String, f64)> {
         let mean = self.ch.mean_psi();
         let max_abs = self.ch.max_abs_psi();
         let energy = self.ch.free_energy().total;
@@ -278,6 +291,18 @@ impl BinaryFluid {
                 let angle = (h / r).clamp(-1.0, 1.0).acos().to_degrees();
                 out.push((CONTACT_ANGLE_DIAGNOSTICS[0].into(), h));
                 out.push((CONTACT_ANGLE_DIAGNOSTICS[1].into(), angle));
+            }
+        }
+        if let (&InitialPsi::Droplet { inside, .. }, true) =
+            (&self.cfg.initial, self.reporting.due(step))
+        {
+            let g = self.ch.grid();
+            let scratch = self.droplet.get_or_insert_with(|| droplet::Scratch::new(g));
+            if let Some(d) = droplet::measure(&mut self.ch, inside, scratch) {
+                let values = [d.radius, d.pressure_jump, d.pressure_jump_mu];
+                for (n, v) in droplet::DROPLET_DIAGNOSTICS.iter().zip(values) {
+                    out.push((n.to_string(), v));
+                }
             }
         }
         out

@@ -52,6 +52,7 @@ mod equilibrium;
 mod initial;
 pub mod limits;
 mod params;
+mod pressure;
 #[cfg(test)]
 mod tests;
 

@@ -379,8 +379,9 @@ impl Component for FluidComponent {
                     .iter()
                     .flat_map(|f| std::iter::repeat_n(f.affinity, f.beads))
                     .collect();
-                let fluid = BinaryFluid::new(grid, b, &psi0, cfg.walls.is_some())
+                let mut fluid = BinaryFluid::new(grid, b, &psi0, cfg.walls.is_some())
                     .map_err(ComponentError)?;
+                fluid.set_reporting(crate::binary_fluid::droplet::Reporting::from_scene(&table));
                 limits.extend(
                     fluid
                         .check_time_step(stability::initial_speed(&cfg), cfg.density, cfg.viscosity)
@@ -524,7 +525,7 @@ impl Component for FluidComponent {
                     .map_err(|e| ComponentError(format!("{e} (at step {step})")))?;
                 run.psi_step = Some(step);
                 Ok(PhaseReport {
-                    diagnostics: b.report(spm),
+                    diagnostics: b.report(spm, step),
                 })
             }
             Phase::FluidMomentumExchange => {

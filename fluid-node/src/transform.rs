@@ -95,12 +95,14 @@ impl Transform {
         } else {
             groups
         };
-        let longest = grid.ny.max(grid.nz);
+        // A block of columns holds block(len) * len values for each column length used;
+        // the longest length need not give the largest block (120 x 120 x 32: 8 * 120 < 32 * 32).
+        let lines_len = (block(grid.ny) * grid.ny).max(block(grid.nz) * grid.nz);
         let workspaces = (0..groups)
             .map(|_| Workspace {
                 row: vec![0.0; grid.nx],
                 fft_scratch: vec![Complex64::default(); scratch],
-                lines: vec![Complex64::default(); block(longest) * longest],
+                lines: vec![Complex64::default(); lines_len],
             })
             .collect();
         Self {
@@ -271,6 +273,8 @@ mod tests {
             Grid::new(2, [15, 12, 1]),
             Grid::new(3, [9, 10, 11]),
             Grid::new(3, [16, 12, 8]),
+            // A short z whose column block outgrows the longest axis's (32 * 32 > 8 * 120).
+            Grid::new(3, [4, 120, 32]),
         ] {
             let mut t = Transform::new(g, 3);
             let a = field(g);

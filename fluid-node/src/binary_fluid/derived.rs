@@ -1,6 +1,7 @@
 //! Numbers a binary-fluid scene reports when configured ("derived" in the summary): σ, the
 //! affinities, the dimensionless numbers of L2020 eqs. 39–42 as far as the scene defines
-//! them, and the contact-angle reference of L2020 eq. 44 for a bead at a flat interface.
+//! them, the contact-angle reference of L2020 eq. 44 for a bead at a flat interface, and the
+//! eq. 45 radius of an initial droplet (`fluid.binary.initial_droplet_radius`).
 //!
 //! Scales (L2020 section 3): L0 = Δ = 1 (the grid spacing), ρ0 = `fluid.density`,
 //! η0 = `fluid.viscosity`, σ0 = e0 L0 (not σ_AB = (2√2/3) σ0 ξ), D0 = e0 M, and U0 the
@@ -8,7 +9,7 @@
 //! wall speed; without either, Re, We and Pe are not reported. Ec = k0 / σ0 with
 //! k0 = π r_b E / 2 (eq. 11) per fibre that gives `youngs_modulus`.
 use super::scene::{BinaryConfig, InitialPsi};
-use crate::cahn_hilliard::{contact_angle, psi_star, WallProblem};
+use crate::cahn_hilliard::{contact_angle, droplet, half_droplet, psi_star, WallProblem};
 use crate::config::FluidConfig;
 use crate::grid::Grid;
 use std::f64::consts::PI;
@@ -48,6 +49,9 @@ pub fn numbers(cfg: &FluidConfig, b: &BinaryConfig, grid: Grid) -> Vec<(String, 
     if cfg.walls.is_some() {
         out.push(("walls.psi_star".into(), psi_star(b.wall_affinity)));
     }
+    if let Some(r) = initial_droplet_radius(b, grid) {
+        out.push(("fluid.binary.initial_droplet_radius".into(), r));
+    }
     if let InitialPsi::Flat { axis, .. } = b.initial {
         // Two interfaces close the periodic slab: area 2 × the cross-section.
         let n = grid.sizes();
@@ -71,4 +75,86 @@ pub fn numbers(cfg: &FluidConfig, b: &BinaryConfig, grid: Grid) -> Vec<(String, 
         }
     }
     out
+}
+
+/// The equivalent radius of an initial droplet or half-droplet by L2020 eq. 45,
+/// π R² = ∫_{ψ>0.5} ψ dx (2D; in 3D the sphere of the same integral, 4/3 π R³), on the
+/// initial ψ (the fluid inside counted positive, so a droplet of B works too). It needs
+/// the field because the tanh edge counts: for a disk of radius a, R is a little below a.
+/// None for a flat initial interface.
+pub fn initial_droplet_radius(b: &BinaryConfig, grid: Grid) -> Option<f64> {
+    let mut psi = vec![0.0; grid.cells()];
+    let xi = b.ch.xi;
+    let sign = match b.initial {
+        InitialPsi::Droplet {
+            centre,
+            radius,
+            inside,
+        } => {
+            droplet(grid, xi, centre, radius, inside, &mut psi).ok()?;
+            inside.psi()
+        }
+        InitialPsi::HalfDroplet {
+            centre,
+            normal,
+            radius,
+            inside,
+        } => {
+            half_droplet(grid, xi, centre, normal, radius, inside, &mut psi).ok()?;
+            inside.psi()
+        }
+        InitialPsi::Flat { .. } => return None,
+    };
+    let integral: f64 = psi.iter().map(|p| sign * p).filter(|&p| p > 0.5).sum();
+    Some(if grid.dims == 2 {
+        (integral / PI).sqrt()
+    } else {
+        (0.75 * integral / PI).cbrt()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Eq. 45 counts ψ only where ψ > 0.5, so across a flat tanh edge of width w = √2 ξ it
+    /// misses δ = w (atanh 0.5 + ln(4/3)) = 0.837 w of a sharp edge (∫ from 0.549 w of
+    /// tanh(s/w) ds = L - 0.549 w - w ln(1 + e^{-1.099})). A disk of radius a has
+    /// R ≈ a - δ; a half-disk R² ≈ a²/2 - (π + 2) a δ / π (its perimeter times δ).
+    #[test]
+    fn eq45_radius_of_a_disk_and_a_half_disk() {
+        use crate::cahn_hilliard::{CahnHilliardConfig, Fluid, Scheme};
+        let ch = CahnHilliardConfig {
+            xi: 2.0,
+            e0: 0.1,
+            mobility: 1.0,
+            dt: 0.5,
+            stabilisation: 3.0,
+            scheme: Scheme::SemiImplicit,
+        };
+        let grid = Grid::new(2, [160, 160, 1]);
+        let cfg = |initial| BinaryConfig {
+            ch: ch.clone(),
+            velocity_scale: None,
+            wall_affinity: 0.0,
+            initial,
+        };
+        let disk = cfg(InitialPsi::Droplet {
+            centre: [80.0, 80.0, 0.0],
+            radius: 40.0,
+            inside: Fluid::A,
+        });
+        let delta = 2f64.sqrt() * 2.0 * (0.5f64.atanh() + (4.0f64 / 3.0).ln());
+        let r = initial_droplet_radius(&disk, grid).unwrap();
+        assert!((r - (40.0 - delta)).abs() < 0.1, "{r} vs {}", 40.0 - delta);
+        let half = cfg(InitialPsi::HalfDroplet {
+            centre: [80.0, 40.0, 0.0],
+            normal: [0.0, 1.0, 0.0],
+            radius: 60.0,
+            inside: Fluid::B,
+        });
+        let r = initial_droplet_radius(&half, grid).unwrap();
+        let expect = (1800.0 - (PI + 2.0) * 60.0 * delta / PI).sqrt();
+        assert!((r - expect).abs() < 0.3, "{r} vs {expect}");
+    }
 }

@@ -1,0 +1,95 @@
+//! Time of one capillary SPM step of the fluid node (L2020 sections 2.4–2.6): bead states
+//! published, fluid-phase-field (φ and ψ* from the beads, one semi-implicit Cahn–Hilliard
+//! step advected by u, its diagnostics), fluid-momentum-exchange (φ again, the capillary
+//! force of eqs. 33–34 into u*, impulses), impulses read, fluid-penalty. Bead states are
+//! prescribed (a straight chain of affinity 0.3 moving slowly across a droplet), so no fibre
+//! node runs. The grids and chains are those of `spm_step`, so the two benches give the
+//! cost of the phase field:
+//!
+//! - 2D 256 x 200 with an 18-bead chain of r_b = 6, a droplet of R = 50 (xi = 2, xi_c = 5);
+//! - 3D 128 x 120 x 120 with a 10-bead chain of r_b = 6, a droplet of R = 30.
+//!
+//! The droplet diagnostics (pressure, radius) run only at reporting steps: the scene gives
+//! no `time.steps`, so never here. Throughput is per grid cell.
+use cosim::{BeadState, Component, Exchange, InProcessExchange, Phase, Port};
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use fluid_node::FluidComponent;
+use std::time::Duration;
+
+fn chain(beads: usize, centre: [f64; 3], dims: usize, n: u64) -> Vec<BeadState> {
+    (0..beads)
+        .map(|i| {
+            let x = centre[0] + 12.0 * (i as f64 - 0.5 * (beads - 1) as f64) + 1e-3 * n as f64;
+            BeadState {
+                position: [x, centre[1], if dims == 3 { centre[2] } else { 0.0 }],
+                orientation: [1.0, 0.0, 0.0, 0.0],
+                velocity: [1e-3, 0.0, 0.0],
+                angular_velocity: [0.0, 0.0, 1e-4],
+            }
+        })
+        .collect()
+}
+
+fn bench_case(c: &mut Criterion, name: &str, dims: usize, grid: [usize; 3], beads: usize) {
+    let (grid_toml, centre_toml, radius) = if dims == 2 {
+        (
+            format!("[{}, {}]", grid[0], grid[1]),
+            format!("[{}, {}]", grid[0] / 2, grid[1] / 2),
+            50,
+        )
+    } else {
+        (
+            format!("[{}, {}, {}]", grid[0], grid[1], grid[2]),
+            format!("[{}, {}, {}]", grid[0] / 2, grid[1] / 2, grid[2] / 2),
+            30,
+        )
+    };
+    let scene = format!(
+        "dimensions = {dims}\n[time]\ndt = 0.5\n[fluid]\nmethod = \"spm\"\ngrid = {grid_toml}\n\
+         viscosity = 1.0\nxi = 2\nxi_cutoff = 5\n\
+         [fluid.binary]\nxi = 2\ne0 = 0.1\nmobility = 1\ninitial = \"droplet\"\n\
+         centre = {centre_toml}\nradius = {radius}\n\
+         [[fibre]]\nbeads = {beads}\nbead_radius = 6\naffinity = 0.3\n"
+    );
+    let mut comp = FluidComponent::new();
+    let mut x = InProcessExchange::new();
+    comp.configure(&scene, &mut x).unwrap();
+    let centre = [
+        grid[0] as f64 / 2.0,
+        grid[1] as f64 / 2.0,
+        grid[2] as f64 / 2.0,
+    ];
+    let mut n = 0u64;
+    let mut imp = Vec::with_capacity(beads);
+    let mut group = c.benchmark_group("capillary_step");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(if dims == 3 { 4 } else { 2 }));
+    group.throughput(Throughput::Elements(grid.iter().product::<usize>() as u64));
+    group.bench_function(name, |b| {
+        b.iter(|| {
+            let at_n = chain(beads, centre, dims, n);
+            let at_n1 = chain(beads, centre, dims, n + 1);
+            x.publish_states(Port::BeadStates, n, &at_n).unwrap();
+            let pf = comp.run_phase(n, Phase::FluidPhaseField, &mut x).unwrap();
+            x.publish_states(Port::BeadStates, n + 1, &at_n1).unwrap();
+            comp.run_phase(n, Phase::FluidMomentumExchange, &mut x)
+                .unwrap();
+            x.read_impulses(Port::BeadImpulses, &mut imp).unwrap();
+            x.publish_states(Port::BeadStates, n + 1, &at_n1).unwrap();
+            let r = comp.run_phase(n, Phase::FluidPenalty, &mut x).unwrap();
+            n += 1;
+            std::hint::black_box((pf, r))
+        })
+    });
+    group.finish();
+}
+
+fn bench(c: &mut Criterion) {
+    bench_case(c, "2d_256x200_18_beads", 2, [256, 200, 1], 18);
+    bench_case(c, "3d_128x120x120_10_beads", 3, [128, 120, 120], 10);
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
