@@ -19,7 +19,7 @@
 //!   (N-6)/2 + 5, the part that bends around the droplet; appendix C does not say which
 //!   six), and R_droplet the equivalent radius of the initial droplet by L2020 eq. 45
 //!   (derived `fluid.binary.initial_droplet_radius`).
-use crate::metrics::{dot, lookup, norm, sub, Context, Metric};
+use crate::metrics::{dot, lookup, norm, plain, sub, Context, Metric};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
@@ -386,18 +386,6 @@ fn bend_normal(ctx: &Context, points: &[P]) -> P {
         }
     }
     smallest_eigenvector(cov)
-}
-
-fn plain(value: f64) -> Metric {
-    Metric {
-        value,
-        reference: None,
-        relative_error: None,
-        reference_source: String::new(),
-        extra: BTreeMap::new(),
-        label: None,
-        note: String::new(),
-    }
 }
 
 /// The interface metric `name` of fibre 0 at the end of the run, or what is missing.

@@ -62,7 +62,7 @@ pub fn lookup(list: &[(String, f64)], key: &str) -> Option<f64> {
 }
 
 /// A metric without a reference.
-fn plain(value: f64) -> Metric {
+pub(crate) fn plain(value: f64) -> Metric {
     Metric {
         value,
         reference: None,

@@ -453,12 +453,7 @@ impl MrtD2q9 {
         check_viscosity(nu_f)?;
         check_viscosity(nu_s)?;
         if let Some(k) = phi.iter().position(|p| !(0.0..=1.0).contains(p)) {
-            return Err(format!(
-                "solid fraction {} at node ({}, {}) is outside [0, 1]",
-                phi[k],
-                k % self.geo.nx,
-                k / self.geo.nx
-            ));
+            return Err(self.fraction_out_of_range(phi, k));
         }
         let min = min_len(self.geo.ny, self.geo.nx);
         self.nu
@@ -482,25 +477,27 @@ impl MrtD2q9 {
         check_viscosity(nu_f)?;
         check_viscosity(nu_s)?;
         let n = self.nu.len();
-        if let Some(&k) = nodes
-            .iter()
-            .find(|&&k| k >= n || !(0.0..=1.0).contains(&phi[k]))
-        {
-            return Err(if k >= n {
-                format!("node index {k} is outside the lattice of {n} nodes")
-            } else {
-                format!(
-                    "solid fraction {} at node ({}, {}) is outside [0, 1]",
-                    phi[k],
-                    k % self.geo.nx,
-                    k / self.geo.nx
-                )
-            });
+        if let Some(&k) = nodes.iter().find(|&&k| k >= n) {
+            return Err(format!(
+                "node index {k} is outside the lattice of {n} nodes"
+            ));
+        }
+        if let Some(&k) = nodes.iter().find(|&&k| !(0.0..=1.0).contains(&phi[k])) {
+            return Err(self.fraction_out_of_range(phi, k));
         }
         for &k in nodes {
             self.nu[k] = nu_f + (nu_s - nu_f) * phi[k];
         }
         Ok(())
+    }
+
+    fn fraction_out_of_range(&self, phi: &[f64], k: usize) -> String {
+        format!(
+            "solid fraction {} at node ({}, {}) is outside [0, 1]",
+            phi[k],
+            k % self.geo.nx,
+            k / self.geo.nx
+        )
     }
 
     /// Same viscosity everywhere.
