@@ -190,3 +190,41 @@ fn contact_angle_40_deg_within_3_deg() {
     check_bounded(&c, 8.0, 2.0);
     assert!((c.angle - c.reference).abs() < 3.0);
 }
+
+/// Effects (issue: "a single-fluid scene spends no time in Cahn-Hilliard"): the SPM step of
+/// a single fluid has no `fluid-phase-field` phase and no time spent in it; with
+/// `[fluid.binary]` the phase runs first in every step.
+#[test]
+fn phase_field_runs_only_with_a_second_fluid() {
+    let short = ["time.steps=5".to_string(), "output.interval=5".to_string()];
+    let single = run_in_process(&config("spm/couette.toml"), &short, "single-fluid-effects");
+    let binary = run_in_process(
+        &config("capillary/flat_interface.toml"),
+        &short,
+        "binary-fluid-effects",
+    );
+    let phases = |s: &serde_json::Value| -> Vec<String> {
+        s["schedule"]
+            .as_array()
+            .expect("schedule")
+            .iter()
+            .map(|p| p.as_str().expect("phase name").to_string())
+            .collect()
+    };
+    let (a, b) = (phases(&single), phases(&binary));
+    assert!(!a.iter().any(|p| p == "fluid-phase-field"), "{a:?}");
+    assert!(single["seconds_per_phase"]
+        .get("fluid-phase-field")
+        .is_none());
+    assert_eq!(
+        b.first().map(String::as_str),
+        Some("fluid-phase-field"),
+        "{b:?}"
+    );
+    assert!(
+        binary["seconds_per_phase"]["fluid-phase-field"]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
+}

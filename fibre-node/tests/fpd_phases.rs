@@ -177,8 +177,9 @@ fn what_fpd_cannot_carry_is_refused_with_the_reason() {
     );
     let e = configure_error(&format!("{FPD_SCENE}substeps = 4\n"));
     assert!(e.contains("fibre.0.substeps = 4"), "{e}");
-    let e = configure_error(&format!("{FPD_SCENE}clamp = [0]\n"));
-    assert!(e.contains("fibre.0.clamp") && e.contains("loads"), "{e}");
+    // A clamp is carried: the bead is held by a force (fibre.rs `hold_under_fpd`; its
+    // dynamics are tested there and, with a fluid, in tests/fpd.rs).
+    configured(&format!("{FPD_SCENE}clamp = [0]\n"));
 }
 
 #[test]
