@@ -449,9 +449,7 @@ impl MrtD2q9 {
         nu_f: f64,
         nu_s: f64,
     ) -> Result<(), String> {
-        self.check_len("solid fraction", phi.len())?;
-        check_viscosity(nu_f)?;
-        check_viscosity(nu_s)?;
+        self.check_fraction_field(phi, nu_f, nu_s)?;
         if let Some(k) = phi.iter().position(|p| !(0.0..=1.0).contains(p)) {
             return Err(self.fraction_out_of_range(phi, k));
         }
@@ -473,9 +471,7 @@ impl MrtD2q9 {
         nu_f: f64,
         nu_s: f64,
     ) -> Result<(), String> {
-        self.check_len("solid fraction", phi.len())?;
-        check_viscosity(nu_f)?;
-        check_viscosity(nu_s)?;
+        self.check_fraction_field(phi, nu_f, nu_s)?;
         let n = self.nu.len();
         if let Some(&k) = nodes.iter().find(|&&k| k >= n) {
             return Err(format!(
@@ -489,6 +485,13 @@ impl MrtD2q9 {
             self.nu[k] = nu_f + (nu_s - nu_f) * phi[k];
         }
         Ok(())
+    }
+
+    /// The length of a solid-fraction field and the two viscosities it mixes.
+    fn check_fraction_field(&self, phi: &[f64], nu_f: f64, nu_s: f64) -> Result<(), String> {
+        self.check_len("solid fraction", phi.len())?;
+        check_viscosity(nu_f)?;
+        check_viscosity(nu_s)
     }
 
     fn fraction_out_of_range(&self, phi: &[f64], k: usize) -> String {
