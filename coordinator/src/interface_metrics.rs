@@ -20,7 +20,6 @@
 //!   six), and R_droplet the equivalent radius of the initial droplet by L2020 eq. 45
 //!   (derived `fluid.binary.initial_droplet_radius`).
 use crate::metrics::{dot, lookup, norm, plain, sub, Context, Metric};
-use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
 /// Metric names this module computes.
@@ -161,30 +160,8 @@ pub fn fit_circle(points: &[P], normal: Option<P>) -> Option<Circle> {
     if m < 3 {
         return None;
     }
-    let mean = {
-        let mut c = [0.0; 3];
-        for p in points {
-            for k in 0..3 {
-                c[k] += p[k] / m as f64;
-            }
-        }
-        c
-    };
-    let n = match normal {
-        Some(n) => n,
-        None => {
-            let mut cov = [[0.0; 3]; 3];
-            for p in points {
-                let d = sub(*p, mean);
-                for i in 0..3 {
-                    for j in 0..3 {
-                        cov[i][j] += d[i] * d[j];
-                    }
-                }
-            }
-            smallest_eigenvector(cov)
-        }
-    };
+    let mean = centroid(points);
+    let n = normal.unwrap_or_else(|| best_fit_normal(points));
     let n = {
         let l = norm(n);
         [n[0] / l, n[1] / l, n[2] / l]
@@ -369,13 +346,25 @@ fn bend_normal(ctx: &Context, points: &[P]) -> P {
     if ctx.scene.dimensions == 2 {
         return [0.0, 0.0, 1.0];
     }
+    best_fit_normal(points)
+}
+
+/// The mean of `points`.
+fn centroid(points: &[P]) -> P {
     let m = points.len() as f64;
-    let mut mean = [0.0; 3];
+    let mut c = [0.0; 3];
     for p in points {
         for k in 0..3 {
-            mean[k] += p[k] / m;
+            c[k] += p[k] / m;
         }
     }
+    c
+}
+
+/// The normal of the plane through `points` that fits them best: the eigenvector of the
+/// smallest eigenvalue of their scatter matrix.
+fn best_fit_normal(points: &[P]) -> P {
+    let mean = centroid(points);
     let mut cov = [[0.0; 3]; 3];
     for p in points {
         let d = sub(*p, mean);
