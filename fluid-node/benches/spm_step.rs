@@ -7,31 +7,15 @@
 //! - 3D 128 x 120 x 120 with a 10-bead chain of r_b = 6 (L2020's 3D grid, xi = 2, xi_c = 5).
 //!
 //! Throughput is per grid cell.
-use cosim::{BeadState, Component, Exchange, InProcessExchange, Phase, Port};
-use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use cosim::{Component, Exchange, InProcessExchange, Phase, Port};
+use criterion::{criterion_group, criterion_main, Criterion};
 use fluid_node::FluidComponent;
-use std::time::Duration;
-
-fn chain(beads: usize, centre: [f64; 3], dims: usize, n: u64) -> Vec<BeadState> {
-    (0..beads)
-        .map(|i| {
-            let x = centre[0] + 12.0 * (i as f64 - 0.5 * (beads - 1) as f64) + 1e-3 * n as f64;
-            BeadState {
-                position: [x, centre[1], if dims == 3 { centre[2] } else { 0.0 }],
-                orientation: [1.0, 0.0, 0.0, 0.0],
-                velocity: [1e-3, 0.0, 0.0],
-                angular_velocity: [0.0, 0.0, 1e-4],
-            }
-        })
-        .collect()
-}
+#[path = "common/spm_chain.rs"]
+mod spm_chain;
+use spm_chain::{centre, chain, grid_toml};
 
 fn bench_case(c: &mut Criterion, name: &str, dims: usize, grid: [usize; 3], beads: usize) {
-    let grid_toml = if dims == 2 {
-        format!("[{}, {}]", grid[0], grid[1])
-    } else {
-        format!("[{}, {}, {}]", grid[0], grid[1], grid[2])
-    };
+    let grid_toml = grid_toml(dims, grid);
     let scene = format!(
         "dimensions = {dims}\n[time]\ndt = 0.5\n[fluid]\nmethod = \"spm\"\ngrid = {grid_toml}\n\
          viscosity = 1.0\nxi = 2\nxi_cutoff = 5\n[[fibre]]\nbeads = {beads}\nbead_radius = 6\n"
@@ -39,19 +23,10 @@ fn bench_case(c: &mut Criterion, name: &str, dims: usize, grid: [usize; 3], bead
     let mut comp = FluidComponent::new();
     let mut x = InProcessExchange::new();
     comp.configure(&scene, &mut x).unwrap();
-    let centre = [
-        grid[0] as f64 / 2.0,
-        grid[1] as f64 / 2.0,
-        grid[2] as f64 / 2.0,
-    ];
+    let centre = centre(grid);
     let mut n = 0u64;
     let mut imp = Vec::with_capacity(beads);
-    let mut group = c.benchmark_group("spm_step");
-    group
-        .sample_size(10)
-        .warm_up_time(Duration::from_millis(500))
-        .measurement_time(Duration::from_secs(if dims == 3 { 4 } else { 2 }));
-    group.throughput(Throughput::Elements(grid.iter().product::<usize>() as u64));
+    let mut group = spm_chain::group(c, "spm_step", dims, grid);
     group.bench_function(name, |b| {
         b.iter(|| {
             let s = chain(beads, centre, dims, n);

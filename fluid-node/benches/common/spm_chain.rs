@@ -1,0 +1,57 @@
+//! What the SPM benches share: the prescribed chain of beads, the grid in scene syntax, and
+//! the criterion group settings (per-cell throughput).
+use cosim::BeadState;
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, Criterion, Throughput};
+use std::time::Duration;
+
+/// A straight chain of `beads` beads of r_b = 6 (touching) along x through `centre`,
+/// moving slowly in x and spinning about z; `n` shifts it by 1e-3 per step.
+pub fn chain(beads: usize, centre: [f64; 3], dims: usize, n: u64) -> Vec<BeadState> {
+    (0..beads)
+        .map(|i| {
+            let x = centre[0] + 12.0 * (i as f64 - 0.5 * (beads - 1) as f64) + 1e-3 * n as f64;
+            BeadState {
+                position: [x, centre[1], if dims == 3 { centre[2] } else { 0.0 }],
+                orientation: [1.0, 0.0, 0.0, 0.0],
+                velocity: [1e-3, 0.0, 0.0],
+                angular_velocity: [0.0, 0.0, 1e-4],
+            }
+        })
+        .collect()
+}
+
+/// `[nx, ny]` or `[nx, ny, nz]`.
+pub fn grid_toml(dims: usize, grid: [usize; 3]) -> String {
+    if dims == 2 {
+        format!("[{}, {}]", grid[0], grid[1])
+    } else {
+        format!("[{}, {}, {}]", grid[0], grid[1], grid[2])
+    }
+}
+
+/// The centre of the box.
+pub fn centre(grid: [usize; 3]) -> [f64; 3] {
+    [
+        grid[0] as f64 / 2.0,
+        grid[1] as f64 / 2.0,
+        grid[2] as f64 / 2.0,
+    ]
+}
+
+/// A group of 10 samples, 0.5 s warm-up, 2 s (2D) or 4 s (3D) of measurement, throughput
+/// per grid cell.
+pub fn group<'a>(
+    c: &'a mut Criterion,
+    name: &str,
+    dims: usize,
+    grid: [usize; 3],
+) -> BenchmarkGroup<'a, WallTime> {
+    let mut group = c.benchmark_group(name);
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(if dims == 3 { 4 } else { 2 }));
+    group.throughput(Throughput::Elements(grid.iter().product::<usize>() as u64));
+    group
+}
