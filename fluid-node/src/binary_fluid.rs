@@ -83,6 +83,43 @@ pub struct BinaryFluid {
     droplet: Option<droplet::Scratch>,
 }
 
+/// The initial ψ field of `cfg` on `grid` (L2020 section 3: a flat interface, a droplet or a
+/// half-droplet, tanh profiles of width √2 ξ).
+pub fn initial_psi(cfg: &BinaryConfig, grid: Grid) -> Result<Vec<f64>, String> {
+    let err = |e: cahn_hilliard::CahnHilliardError| format!("fluid.binary: {e}");
+    let mut psi = vec![0.0; grid.cells()];
+    let xi = cfg.ch.xi;
+    match &cfg.initial {
+        InitialPsi::Flat {
+            axis,
+            positive,
+            position,
+            width,
+        } => {
+            // Fluid A fills [position, position + width) (positive normal) or
+            // [position - width, position) (negative normal), B the rest.
+            let (from, to) = if *positive {
+                (*position, position + width)
+            } else {
+                (position - width, *position)
+            };
+            stratified(grid, xi, *axis, from, to, Fluid::A, &mut psi).map_err(err)?;
+        }
+        InitialPsi::Droplet {
+            centre,
+            radius,
+            inside,
+        } => droplet(grid, xi, *centre, *radius, *inside, &mut psi).map_err(err)?,
+        InitialPsi::HalfDroplet {
+            centre,
+            normal,
+            radius,
+            inside,
+        } => half_droplet(grid, xi, *centre, *normal, *radius, *inside, &mut psi).map_err(err)?,
+    }
+    Ok(psi)
+}
+
 impl BinaryFluid {
     /// The phase field on `grid` with the initial ψ of `cfg`, for beads of affinities
     /// `bead_psi0` (one ψ0 per bead, fibres in order) and walls if `has_walls`.
@@ -94,38 +131,7 @@ impl BinaryFluid {
     ) -> Result<Self, String> {
         let err = |e: cahn_hilliard::CahnHilliardError| format!("fluid.binary: {e}");
         let mut ch = CahnHilliard::new(grid, cfg.ch.clone()).map_err(err)?;
-        let mut psi = vec![0.0; grid.cells()];
-        let xi = cfg.ch.xi;
-        match &cfg.initial {
-            InitialPsi::Flat {
-                axis,
-                positive,
-                position,
-                width,
-            } => {
-                // Fluid A fills [position, position + width) (positive normal) or
-                // [position - width, position) (negative normal), B the rest.
-                let (from, to) = if *positive {
-                    (*position, position + width)
-                } else {
-                    (position - width, *position)
-                };
-                stratified(grid, xi, *axis, from, to, Fluid::A, &mut psi).map_err(err)?;
-            }
-            InitialPsi::Droplet {
-                centre,
-                radius,
-                inside,
-            } => droplet(grid, xi, *centre, *radius, *inside, &mut psi).map_err(err)?,
-            InitialPsi::HalfDroplet {
-                centre,
-                normal,
-                radius,
-                inside,
-            } => {
-                half_droplet(grid, xi, *centre, *normal, *radius, *inside, &mut psi).map_err(err)?
-            }
-        }
+        let psi = initial_psi(cfg, grid)?;
         ch.set_psi(&psi).map_err(err)?;
         let bead_psi_star: Vec<f64> = bead_psi0.iter().map(|&p| psi_star(p)).collect();
         let wall_psi_star = psi_star(cfg.wall_affinity);

@@ -9,7 +9,7 @@
 //! wall speed; without either, Re, We and Pe are not reported. Ec = k0 / σ0 with
 //! k0 = π r_b E / 2 (eq. 11) per fibre that gives `youngs_modulus`.
 use super::scene::{BinaryConfig, InitialPsi};
-use crate::cahn_hilliard::{contact_angle, droplet, half_droplet, psi_star, WallProblem};
+use crate::cahn_hilliard::{contact_angle, psi_star, WallProblem};
 use crate::config::FluidConfig;
 use crate::grid::Grid;
 use std::f64::consts::PI;
@@ -83,28 +83,11 @@ pub fn numbers(cfg: &FluidConfig, b: &BinaryConfig, grid: Grid) -> Vec<(String, 
 /// the field because the tanh edge counts: for a disk of radius a, R is a little below a.
 /// None for a flat initial interface.
 pub fn initial_droplet_radius(b: &BinaryConfig, grid: Grid) -> Option<f64> {
-    let mut psi = vec![0.0; grid.cells()];
-    let xi = b.ch.xi;
     let sign = match b.initial {
-        InitialPsi::Droplet {
-            centre,
-            radius,
-            inside,
-        } => {
-            droplet(grid, xi, centre, radius, inside, &mut psi).ok()?;
-            inside.psi()
-        }
-        InitialPsi::HalfDroplet {
-            centre,
-            normal,
-            radius,
-            inside,
-        } => {
-            half_droplet(grid, xi, centre, normal, radius, inside, &mut psi).ok()?;
-            inside.psi()
-        }
+        InitialPsi::Droplet { inside, .. } | InitialPsi::HalfDroplet { inside, .. } => inside.psi(),
         InitialPsi::Flat { .. } => return None,
     };
+    let psi = super::initial_psi(b, grid).ok()?;
     let integral: f64 = psi.iter().map(|p| sign * p).filter(|&p| p > 0.5).sum();
     Some(if grid.dims == 2 {
         (integral / PI).sqrt()
