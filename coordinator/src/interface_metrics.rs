@@ -19,7 +19,7 @@
 //!   (N-6)/2 + 5, the part that bends around the droplet; appendix C does not say which
 //!   six), and R_droplet the equivalent radius of the initial droplet by L2020 eq. 45
 //!   (derived `fluid.binary.initial_droplet_radius`).
-use crate::metrics::{dot, lookup, norm, plain, sub, Context, Metric};
+use crate::metrics::{dot, fibre0_bead_radius, lookup, norm, number, plain, sub, Context, Metric};
 use std::f64::consts::PI;
 
 /// Metric names this module computes.
@@ -283,10 +283,6 @@ pub fn classify_wrap(points: &[P], r_b: f64, normal: P) -> (f64, &'static str) {
     (w, label)
 }
 
-fn number(v: Option<&toml::Value>) -> Option<f64> {
-    v.and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-}
-
 /// The unit normal of the flat initial interface of the scene's `[fluid.binary]`
 /// (`normal`: an axis index or an axis-aligned vector; default the last axis).
 fn interface_normal(ctx: &Context) -> Result<P, String> {
@@ -331,11 +327,7 @@ fn fibre_zero(ctx: &Context, name: &str) -> Result<(Vec<P>, f64), String> {
             "metric `{name}` needs fibre 0 with at least 2 beads"
         ));
     }
-    let r_b = ctx
-        .scene
-        .fibre
-        .first()
-        .and_then(|f| number(f.get("bead_radius")))
+    let r_b = fibre0_bead_radius(ctx)
         .ok_or_else(|| format!("metric `{name}` needs fibre.0.bead_radius"))?;
     Ok((ctx.last[..n].iter().map(|s| s.position).collect(), r_b))
 }

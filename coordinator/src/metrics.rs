@@ -61,6 +61,16 @@ pub fn lookup(list: &[(String, f64)], key: &str) -> Option<f64> {
     list.iter().find(|(k, _)| k == key).map(|(_, v)| *v)
 }
 
+/// A TOML number, integer or float.
+pub(crate) fn number(v: Option<&toml::Value>) -> Option<f64> {
+    v.and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+}
+
+/// `fibre.0.bead_radius` of the scene.
+pub(crate) fn fibre0_bead_radius(ctx: &Context) -> Option<f64> {
+    number(ctx.scene.fibre.first().and_then(|f| f.get("bead_radius")))
+}
+
 /// A metric without a reference.
 pub(crate) fn plain(value: f64) -> Metric {
     Metric {
@@ -412,20 +422,9 @@ fn drag_coefficient(ctx: &Context) -> Result<Metric, String> {
         .fluid
         .as_ref()
         .ok_or("metric `drag_coefficient` needs a fluid")?;
-    let rho = match fluid.get("density") {
-        Some(v) => v
-            .as_float()
-            .or(v.as_integer().map(|i| i as f64))
-            .unwrap_or(1.0),
-        None => 1.0,
-    };
-    let a = ctx
-        .scene
-        .fibre
-        .first()
-        .and_then(|f| f.get("bead_radius"))
-        .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-        .ok_or("metric `drag_coefficient` needs fibre 0's bead_radius")?;
+    let rho = number(fluid.get("density")).unwrap_or(1.0);
+    let a =
+        fibre0_bead_radius(ctx).ok_or("metric `drag_coefficient` needs fibre 0's bead_radius")?;
     let cd = -held / (0.5 * rho * u * u.abs() * 2.0 * a);
     let mut m = match crate::reference::cylinder::drag_coefficient(re) {
         Some((reference, source)) => Metric::with_reference(cd, reference, source),
@@ -461,18 +460,8 @@ fn drag_ratio(ctx: &Context) -> Result<Metric, String> {
             .collect(),
         _ => return Err("metric `drag_ratio` needs fluid.grid".into()),
     };
-    let eta = match fluid.get("viscosity") {
-        Some(toml::Value::Float(v)) => *v,
-        Some(toml::Value::Integer(v)) => *v as f64,
-        _ => return Err("metric `drag_ratio` needs fluid.viscosity".into()),
-    };
-    let r = ctx
-        .scene
-        .fibre
-        .first()
-        .and_then(|f| f.get("bead_radius"))
-        .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-        .ok_or("metric `drag_ratio` needs fibre 0's bead_radius")?;
+    let eta = number(fluid.get("viscosity")).ok_or("metric `drag_ratio` needs fluid.viscosity")?;
+    let r = fibre0_bead_radius(ctx).ok_or("metric `drag_ratio` needs fibre 0's bead_radius")?;
     let dt = ctx.scene.time.dt;
     // The fluid drags the held body along the flow (+x): the impulse it receives, over dt.
     let impulse = ctx
