@@ -222,7 +222,7 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
     let fluid_density = table
         .get("fluid")
         .and_then(|f| f.get("density"))
-        .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+        .and_then(toml_number)
         .filter(|r| r.is_finite() && *r > 0.0)
         .unwrap_or(1.0);
 
@@ -278,6 +278,11 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
     })
 }
 
+/// A TOML number, integer or float.
+fn toml_number(v: &toml::Value) -> Option<f64> {
+    v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
+}
+
 /// `k_b` from S2023's bending number (eq. 18), `K = 2 k_b / (eta_f gamma l_c^2)`, with the
 /// scene's FPD shear: `gamma = (top - bottom) / H` for walls at `y = -1/2` and `ny - 1/2`
 /// (`H = ny`, `fluid.method = "fpd-lbm"`), `eta_f = fluid.viscosity` and `l_c = N d`. The
@@ -313,20 +318,19 @@ fn bending_stiffness_from_number(
             "{p}.bending_number: expected a positive number, got {k}"
         ));
     }
-    let num = |v: &toml::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
     let fluid = table.get("fluid").and_then(|f| f.as_table());
     let ny = fluid
         .and_then(|f| f.get("grid"))
         .and_then(|g| g.as_array())
         .and_then(|g| g.get(1))
-        .and_then(num)
+        .and_then(toml_number)
         .filter(|h| *h > 0.0)
         .ok_or(format!(
             "{p}.bending_number needs fluid.grid = [nx, ny] (the gap H = ny)"
         ))?;
     let eta = fluid
         .and_then(|f| f.get("viscosity"))
-        .and_then(num)
+        .and_then(toml_number)
         .filter(|e| *e > 0.0)
         .ok_or(format!(
             "{p}.bending_number needs a positive fluid.viscosity (eta_f)"
@@ -335,7 +339,7 @@ fn bending_stiffness_from_number(
         .get("walls")
         .and_then(|w| w.get("velocity"))
         .and_then(|v| v.as_array())
-        .map(|v| v.iter().filter_map(num).collect::<Vec<_>>());
+        .map(|v| v.iter().filter_map(toml_number).collect::<Vec<_>>());
     let gamma = match walls.as_deref() {
         Some([b, t]) if t != b => (t - b).abs() / ny,
         _ => {

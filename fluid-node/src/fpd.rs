@@ -354,8 +354,8 @@ impl FpdCoupling {
 
     /// Write eq. 1, nu = nu_f + (nu_s - nu_f) phi, into the lattice's viscosity field: the
     /// whole lattice the first time, then only the nodes of the previous and the new boxes
-    /// (elsewhere phi is 0 before and after). A caller that writes the viscosity field by
-    /// other means must call [`FpdCoupling::invalidate_viscosity`].
+    /// (elsewhere phi is 0 before and after, and the field keeps the nu_f that
+    /// [`FpdCoupling::new`] wrote: nothing else may write it once beads are placed).
     pub fn update_viscosity(&mut self, lattice: &mut MrtD2q9) -> Result<(), FpdError> {
         self.check_lattice(lattice)?;
         let (nu_f, nu_s) = (self.cfg.fluid_viscosity, self.cfg.solid_viscosity());
@@ -367,11 +367,6 @@ impl FpdCoupling {
         .map_err(FpdError::Solver)?;
         self.viscosity_current = self.placed;
         Ok(())
-    }
-
-    /// The next [`FpdCoupling::update_viscosity`] rewrites the whole field.
-    pub fn invalidate_viscosity(&mut self) {
-        self.viscosity_current = false;
     }
 
     /// Write the force density of eq. 4 plus the background into the lattice's force field
