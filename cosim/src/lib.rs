@@ -8,6 +8,8 @@
 //! - [`protocol`]: control commands from the coordinator and the replies of a node;
 //! - [`component`]: the [`Component`](component::Component) trait every node implements and
 //!   the one dispatch function both transports share;
+//! - [`profile`]: the smoothed profile of one bead (L2020 eq. 25) and its integrals, the one
+//!   definition both nodes use;
 //! - [`scene_keys`]: reading a node's scene tables with errors naming the dotted key;
 //! - [`exchange`]: the bulk-data [`Exchange`](exchange::Exchange) trait and its in-process
 //!   implementation; [`ipc`]: the iceoryx2 implementation of control and bulk data.
@@ -17,6 +19,7 @@ pub mod effects;
 pub mod exchange;
 pub mod ipc;
 pub mod phase;
+pub mod profile;
 pub mod protocol;
 pub mod scene_keys;
 pub mod types;

@@ -12,10 +12,7 @@ use serde::Deserialize;
 
 /// Default `fluid.density`.
 pub const DEFAULT_DENSITY: f64 = 1.0;
-/// Default `fluid.xi` (interface width, grid units; L2020 uses 1 and 2).
-pub const DEFAULT_XI: f64 = 1.0;
-/// Default `fluid.xi_cutoff` in units of `fluid.xi` (L2020: xi = 1, xi_c = 3).
-pub const DEFAULT_CUTOFF_OVER_XI: f64 = 3.0;
+pub use cosim::profile::{DEFAULT_CUTOFF_OVER_XI, DEFAULT_XI};
 /// Default `walls.thickness`, grid units.
 pub const DEFAULT_WALL_THICKNESS: f64 = 4.0;
 /// Smallest grid size along any axis.
