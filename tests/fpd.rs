@@ -110,6 +110,18 @@ fn fpd_refuses_what_it_cannot_carry() {
     )
     .unwrap_err();
     assert!(e.contains("Mach number"), "{e}");
+    // Walls at +-0.05 over nu = 0.005: cell Reynolds number 10, above the measured limit 8
+    // (fluid-node/src/fpd_lbm.rs, MAX_CELL_REYNOLDS).
+    let e = run_cli(
+        "fpd-refuse-cell-reynolds",
+        &["walls.velocity=[-0.05,0.05]", "fluid.viscosity=0.005"],
+        &["--in-process"],
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("cell Reynolds number max|u| dx / nu = 10.000") && e.contains("exceeds 8"),
+        "{e}"
+    );
 }
 
 /// `fibre.N.bending_number` (S2023 eq. 18) sets k_b in the fibre node; the fluid node,

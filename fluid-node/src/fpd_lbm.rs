@@ -26,6 +26,14 @@ pub use uniform_stream::{UniformStream, DEFAULT_SPONGE_RATE};
 pub const MAX_WALL_MACH: f64 = 0.3;
 /// A run stops when the flow's Mach number exceeds this: the lattice no longer carries it.
 pub const ABORT_MACH: f64 = 0.7;
+/// Largest accepted cell Reynolds number `max|u| dx / nu` (max|u| the fastest wall or
+/// stream, nu the fluid's kinematic viscosity). Measured on this lattice (its rates
+/// `s_e = s_eps = 1.1` and `s_q` tied to `s_nu`): a cylinder held in a uniform stream
+/// (`configs/fpd/cylinder_drag.toml`, r_eta 500) runs 16 000-30 000 steps at a cell Reynolds
+/// number of 8 for U = 0.025, 0.05 and 0.1 and d = 4 and 5, and blows up at 8.75 (step
+/// 15 553), 9 and 10 (within 1 000-5 000 steps) whatever U, d or tau; a Couette flow without
+/// beads runs at 10 and blows up at 12. It is a limit on u / (tau - 1/2), not on tau alone.
+pub const MAX_CELL_REYNOLDS: f64 = 8.0;
 
 /// Diagnostics after `fluid-lattice-step`, in their fixed order; with walls
 /// [`crate::COUETTE_DIAGNOSTIC`] follows.
@@ -111,6 +119,9 @@ pub struct FpdScene {
     pub solid_layers: Option<SolidLayers>,
     /// `[fluid.stream]`: a uniform stream with a sponge (drag of held bodies).
     pub stream: Option<UniformStream>,
+    /// `max|u| dx / nu` with the fastest wall or stream, checked against
+    /// [`MAX_CELL_REYNOLDS`].
+    pub cell_reynolds: f64,
 }
 
 /// Read and check the FPD part of a scene.
@@ -250,6 +261,22 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
             Some(UniformStream::new(r, nx, walls, MAX_WALL_MACH)?)
         }
     };
+    let fastest = walls
+        .iter()
+        .flatten()
+        .chain(stream.as_ref().map(|s| &s.velocity))
+        .fold(0.0f64, |m, u| m.max(u.abs()));
+    let cell_re = fastest * density / viscosity;
+    if cell_re > MAX_CELL_REYNOLDS {
+        return Err(format!(
+            "fluid (fpd-lbm): the cell Reynolds number max|u| dx / nu = {cell_re:.3} (max|u| = \
+             {fastest}, the fastest wall or stream; nu = fluid.viscosity / fluid.density = {}) \
+             exceeds {MAX_CELL_REYNOLDS}, beyond which this MRT lattice was measured to go \
+             unstable; raise fluid.viscosity, or refine the grid (more nodes per bead diameter \
+             at the same Reynolds number)",
+            viscosity / density
+        ));
+    }
     Ok(FpdScene {
         nx,
         ny,
@@ -262,6 +289,7 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
         bending_stiffness,
         solid_layers,
         stream,
+        cell_reynolds: cell_re,
     })
 }
 
@@ -342,6 +370,7 @@ impl FpdRun {
                 scene.coupling.interface_ratio,
             ),
             ("fluid.interface_thickness".into(), scene.coupling.xi()),
+            ("fluid.cell_reynolds".into(), scene.cell_reynolds),
         ];
         if let Some(s) = &scene.stream {
             let d = 2.0 * scene.coupling.radius;
