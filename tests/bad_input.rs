@@ -169,12 +169,14 @@ fn unwritable_out() {
 /// The fluid node provides `capillarity` now (the only effect a scene could ask for that no
 /// component provided), so an empty `[fluid.binary]` reaches the fluid node, which names
 /// the missing key.
+/// The SPM scenes below give GOOD's radius-1 beads a thin profile (`fluid.xi = 0.1`), or
+/// the fibre node would refuse them first as too light for the explicit exchange.
 #[test]
 fn an_incomplete_binary_fluid_is_refused_by_the_fluid_node() {
     check(
         "binary-fluid",
         &format!(
-            "{GOOD}\n[fluid]\nmethod = \"spm\"\ngrid = [16, 16]\nviscosity = 1.0\n[fluid.binary]\n"
+            "{GOOD}\n[fluid]\nmethod = \"spm\"\ngrid = [16, 16]\nviscosity = 1.0\nxi = 0.1\n[fluid.binary]\n"
         ),
         &["fluid.binary.initial", "required key is missing"],
     );
@@ -184,7 +186,7 @@ fn an_incomplete_binary_fluid_is_refused_by_the_fluid_node() {
 fn fluid_keys_are_checked_by_the_fluid_node() {
     check(
         "fluid-no-grid",
-        &format!("{GOOD}\n[fluid]\nmethod = \"spm\"\nviscosity = 1.0\n"),
+        &format!("{GOOD}\n[fluid]\nmethod = \"spm\"\nviscosity = 1.0\nxi = 0.1\n"),
         &["fluid.grid"],
     );
     check(

@@ -106,3 +106,46 @@ fn full_encapsulation_stays_bounded_and_conserves_psi() {
     // (measured 1.09; the 20 % tolerance is our reading of "very close").
     assert!((r - 1.0).abs() < 0.2, "R_c / R_droplet = {r}: {ratio}");
 }
+
+/// Light beads under the explicit SPM exchange (fibre-node/src/spm_exchange.rs). The
+/// tumbling scene's beads (r_b = 6, xi = 2, xi_c = 5, 2D) at density 0.8: the fluid in a
+/// bead's profile has 1.985 / 0.8 = 2.482 times the sharp disc's moment of inertia, above the
+/// limit 2, so the scene is refused before step 0 with the ratio and both cures named
+/// (before the check, this run blew up at step 48 with the CFL error). With
+/// `bead_inertia = "profile"` the ratio is 1 / 0.8 = 1.25 and the same beads run 2000 steps
+/// bounded.
+#[test]
+fn light_beads_are_refused_or_given_the_inertia_of_their_profile() {
+    let light = [
+        ("fibre.0.density", "0.8"),
+        ("time.steps", "2000"),
+        ("output.interval", "1000"),
+    ];
+    let e = run_scene(
+        "capillary_light_beads_refused",
+        &config("capillary/tumbling_2d.toml"),
+        &set(&light),
+        &["--in-process"],
+    )
+    .unwrap_err();
+    for s in [
+        "2.482 times the bead's moment of inertia",
+        "limit 2",
+        "fibre.0.density to at least",
+        "fibre.0.bead_inertia = \"profile\"",
+    ] {
+        assert!(e.contains(s), "{s:?} missing from: {e}");
+    }
+    let mut profile = light.to_vec();
+    profile.push(("fibre.0.bead_inertia", "\"profile\""));
+    let s = run_in_process(
+        &config("capillary/tumbling_2d.toml"),
+        &set(&profile),
+        "capillary_light_beads_profile_inertia",
+    );
+    assert_bounded(&s);
+    let ratio = s["derived"]["fibre.0.profile_to_bead_inertia"]
+        .as_f64()
+        .unwrap();
+    assert!((ratio - 1.25).abs() < 1e-12, "{ratio}");
+}

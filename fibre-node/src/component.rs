@@ -2,6 +2,7 @@
 use crate::config::{parse_scene, Coupling, ModelKind, SceneConfig, MAX_SUBSTEPS};
 use crate::fibre::{BeadKinematics, Fibre, Model};
 use crate::quaternion::{from_array, to_array, Vec3};
+use crate::spm_exchange;
 use crate::stability::{stability_limit, SAFETY};
 use cosim::description::{parameter as param, ModelDescription, PortDescription};
 use cosim::{
@@ -207,6 +208,7 @@ impl Component for FibreComponent {
                 param("fibre.N.bending_stiffness", "mass length^2 / time^2", Some("E I / l0"), "bead-spring k_b (U_b = -k_b sum t_i+1 . t_i)"),
                 param("fibre.N.affinity", "1", Some("0.0"), "wetting affinity psi0 of the fibre (read by the fluid node)"),
                 param("fibre.N.bending_number", "1", Some("none"), "bead-spring under fpd-lbm: bending number K = 2 k_b / (eta_f gamma l_c^2) (S2023 eq. 18), converted to k_b with fluid.viscosity, the wall shear gamma = (top - bottom) / ny and l_c = N d; excludes bending_stiffness"),
+                param("fibre.N.bead_inertia", "1", Some("\"solid\""), "bead moment of inertia: \"solid\" (sharp disc or sphere, as fibre.N.density says) or \"profile\" (density times the moment of the bead's smoothed profile, SPM only); under SPM a bead whose profile fluid has 2 or more times its mass or moment of inertia is refused (explicit exchange limit)"),
                 param("fibre.N.beam_forces", "1", Some("\"paper\""), "cohesive beam: \"paper\" (L2020 eqs. 11-24) or \"energy-consistent\" (the same to leading order, exactly conservative to third order in the bead angles)"),
             ],
             inputs: vec![
@@ -284,6 +286,17 @@ impl Component for FibreComponent {
                 check_fpd_fibre(n, cfg).map_err(ComponentError)?;
             }
             let mut f = Fibre::straight(cfg, scene.dimensions, scene.coupling == Coupling::Spm);
+            let exchange = scene.spm_profile.map(|profile| {
+                let (r, dims) = (cfg.bead_radius, scene.dimensions as usize);
+                if cfg.profile_inertia {
+                    f.inertia = profile.mass_inertia(cfg.density, r, dims).1;
+                }
+                spm_exchange::ratios(profile, scene.fluid_density, r, dims, f.mass, f.inertia)
+            });
+            if let Some(r) = exchange {
+                spm_exchange::check(&format!("fibre.{n}"), r, cfg.density)
+                    .map_err(ComponentError)?;
+            }
             if fpd && !cfg.clamp.is_empty() {
                 // The fluid mass a 2D FPD bead displaces, rho pi a^2.
                 let a = cfg.bead_radius;
@@ -317,6 +330,10 @@ impl Component for FibreComponent {
             derived.push((format!("{p}.bending_rigidity"), f.bending_rigidity()));
             derived.push((format!("{p}.bead_mass"), f.mass));
             derived.push((format!("{p}.bead_moment_of_inertia"), f.inertia));
+            if let Some(r) = exchange {
+                derived.push((format!("{p}.profile_to_bead_mass"), r.mass));
+                derived.push((format!("{p}.profile_to_bead_inertia"), r.inertia));
+            }
             match &f.model {
                 Model::CohesiveBeam(b) => {
                     derived.push((format!("{p}.axial_stiffness"), b.axial));
@@ -602,7 +619,10 @@ mod tests {
     use cosim::InProcessExchange;
     use std::f64::consts::PI;
 
-    /// Configure, and return the component with the exchange it publishes to.
+    /// Configure, and return the component with the exchange it publishes to. The SPM
+    /// scenes below give their beads of radius 1-2 a thin profile (`fluid.xi = 0.1`): with the
+    /// default xi = 1 the profile's fluid would outweigh such small beads several times over,
+    /// which the explicit-exchange check refuses (`spm_exchange`).
     fn configure(scene: &str) -> (FibreComponent, InProcessExchange, Configured) {
         let mut c = FibreComponent::new();
         let mut x = InProcessExchange::new();
@@ -896,7 +916,8 @@ mod tests {
     /// predicted impulses, and the restored run continues bit for bit.
     #[test]
     fn save_restore_with_fluid_impulses_is_bit_identical() {
-        let scene = "dimensions = 2\n[time]\ndt = 0.1\n[fluid]\nmethod = \"spm\"\n[[fibre]]\n\
+        let scene =
+            "dimensions = 2\n[time]\ndt = 0.1\n[fluid]\nmethod = \"spm\"\nxi = 0.1\n[[fibre]]\n\
                      model = \"cohesive-beam\"\nbeads = 5\nbead_radius = 1\nyoungs_modulus = 1\n\
                      substeps = 3\n";
         let impulses = |n: u64| -> Vec<BeadImpulse> {
@@ -996,7 +1017,7 @@ mod tests {
         );
         assert_eq!(effects_of(&bs), ["beam-elasticity"]);
         assert_eq!(
-            effects_of(&format!("{bs}[fluid]\nmethod = \"spm\"\n")),
+            effects_of(&format!("{bs}[fluid]\nmethod = \"spm\"\nxi = 0.1\n")),
             ["beam-elasticity", "bead-rotation"]
         );
         assert_eq!(
@@ -1033,7 +1054,7 @@ mod tests {
 
     #[test]
     fn phases_reports_and_impulses() {
-        let scene = "dimensions = 2\n[time]\ndt = 1e-3\n[fluid]\nmethod = \"spm\"\n[[fibre]]\nmodel = \"cohesive-beam\"\nbeads = 3\nbead_radius = 1\nyoungs_modulus = 1\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = 2\nbead_radius = 1\nyoungs_modulus = 1\n";
+        let scene = "dimensions = 2\n[time]\ndt = 1e-3\n[fluid]\nmethod = \"spm\"\nxi = 0.1\n[[fibre]]\nmodel = \"cohesive-beam\"\nbeads = 3\nbead_radius = 1\nyoungs_modulus = 1\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = 2\nbead_radius = 1\nyoungs_modulus = 1\n";
         let (mut c, mut x, _) = configure(scene);
         let mut fluid = x.clone();
         assert!(c.run_phase(0, Phase::FibreVelocities, &mut x).is_err());

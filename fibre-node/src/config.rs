@@ -4,6 +4,8 @@
 //!
 //! Every refusal names the dotted path (`fibre.N.key`), the value and what was expected;
 //! nothing panics on any input.
+use crate::spm_exchange::SmoothedProfile;
+use cosim::profile::{DEFAULT_CUTOFF_OVER_XI, DEFAULT_XI};
 use cosim::scene_keys::{
     self, describe_value as describe_toml, deserialize_at as deserialize, positive,
 };
@@ -64,6 +66,9 @@ pub struct FibreConfig {
     /// Cohesive beam only: `true` for the energy-consistent force law
     /// (`beam_forces = "energy-consistent"`), `false` for the paper's (`"paper"`).
     pub energy_consistent: bool,
+    /// `bead_inertia = "profile"`: the bead's moment of inertia is `density` times that of
+    /// its smoothed profile (SPM only); `"solid"` (default): that of a sharp disc or sphere.
+    pub profile_inertia: bool,
 }
 
 /// What the fibre node reads from a scene.
@@ -80,6 +85,9 @@ pub struct SceneConfig {
     /// `fluid.density` (mass / length^dimensions, default 1): sets the gains that hold
     /// clamped beads under FPD. The fluid node validates it.
     pub fluid_density: f64,
+    /// Under SPM: the beads' smoothed profile (`fluid.xi`, `fluid.xi_cutoff`, with the fluid
+    /// node's defaults), which sizes the fluid a bead exchanges momentum with.
+    pub spm_profile: Option<SmoothedProfile>,
     pub fibres: Vec<FibreConfig>,
 }
 
@@ -140,6 +148,7 @@ struct RawFibre {
     affinity: Option<f64>,
     bending_number: Option<f64>,
     beam_forces: Option<String>,
+    bead_inertia: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -225,6 +234,21 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         .and_then(toml_number)
         .filter(|r| r.is_finite() && *r > 0.0)
         .unwrap_or(1.0);
+    // The fluid node validates these; here they only size the profile's inertia.
+    let spm_profile = (coupling == Coupling::Spm).then(|| {
+        let key = |k: &str| {
+            table
+                .get("fluid")
+                .and_then(|f| f.get(k))
+                .and_then(toml_number)
+                .filter(|x| x.is_finite() && *x > 0.0)
+        };
+        let xi = key("xi").unwrap_or(DEFAULT_XI);
+        SmoothedProfile {
+            xi,
+            cutoff: key("xi_cutoff").unwrap_or(DEFAULT_CUTOFF_OVER_XI * xi),
+        }
+    });
 
     let list = match table.get("fibre") {
         None => return Err(
@@ -257,6 +281,12 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
     }
 
     for (n, f) in fibres.iter_mut().enumerate() {
+        if f.profile_inertia && coupling != Coupling::Spm {
+            return Err(format!(
+                "fibre.{n}.bead_inertia = \"profile\": only the SPM fluid (fluid.method = \"spm\") \
+                 gives beads a smoothed profile; use \"solid\" or remove the key"
+            ));
+        }
         if let Some(k) = f.bending_number {
             f.bending_stiffness = Some(bending_stiffness_from_number(
                 &table,
@@ -274,6 +304,7 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         has_fluid,
         coupling,
         fluid_density,
+        spm_profile,
         fibres,
     })
 }
@@ -488,8 +519,18 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
             ))
         }
     };
+    let profile_inertia = match raw.bead_inertia.as_deref() {
+        None | Some("solid") => false,
+        Some("profile") => true,
+        Some(other) => {
+            return Err(format!(
+                "{p}.bead_inertia: expected \"solid\" or \"profile\", got {other:?}"
+            ))
+        }
+    };
     Ok(FibreConfig {
         energy_consistent,
+        profile_inertia,
         model,
         beads,
         bead_radius,

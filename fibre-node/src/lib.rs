@@ -14,6 +14,7 @@ pub mod config;
 pub mod energies;
 pub mod fibre;
 pub mod quaternion;
+pub mod spm_exchange;
 pub mod stability;
 
 pub use component::{FibreComponent, DIAGNOSTICS};

@@ -154,7 +154,8 @@ fn phases_of_the_other_coupling_are_refused() {
         "{e}"
     );
 
-    let spm = FPD_SCENE.replace("fpd-lbm", "spm");
+    // A thin profile (xi = 0.2) keeps these radius-2 beads within the SPM exchange limit.
+    let spm = FPD_SCENE.replace("\"fpd-lbm\"", "\"spm\"\nxi = 0.2");
     let (mut c, mut x) = configured(&spm);
     let e = c.run_phase(0, Phase::FibreForces, &mut x).unwrap_err();
     assert!(
