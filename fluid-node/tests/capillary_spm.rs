@@ -38,7 +38,8 @@ fn lookup(d: &[(String, f64)], name: &str) -> f64 {
         .1
 }
 
-const FLAT: &str = "dimensions = 2\n[time]\ndt = 0.5\n[fluid]\nmethod = \"spm\"\n\
+/// `time.steps = 400`: the free energy is reported at logged steps only, here the last.
+const FLAT: &str = "dimensions = 2\n[time]\ndt = 0.5\nsteps = 400\n[fluid]\nmethod = \"spm\"\n\
                     grid = [24, 48]\nviscosity = 0.5\n\
                     [fluid.binary]\ne0 = 0.05\nmobility = 1\ninitial = \"flat\"\n\
                     normal = 1\nposition = 12\nwidth = 24\n";
