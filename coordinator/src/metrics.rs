@@ -1,6 +1,7 @@
 //! Observables computed from the bead trajectory at the end of a run, each with its
 //! reference where one exists (REFERENCE.md section 1).
 use crate::reference::elastica;
+use crate::reference::stokes_chain_2d as stokes;
 use cosim::BeadState;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -64,6 +65,16 @@ pub fn lookup(list: &[(String, f64)], key: &str) -> Option<f64> {
 /// A TOML number, integer or float.
 pub(crate) fn number(v: Option<&toml::Value>) -> Option<f64> {
     v.and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+}
+
+/// Bretherton constant of fibre 0 as a rigid chain in unbounded 2D Stokes flow
+/// ([`stokes::chain_bretherton`]), for a 2D scene whose fibre 0 is a straight chain of
+/// `beads` >= 2 touching beads; `None` otherwise (3D, or beads spaced apart).
+fn stokes_2d_chain(ctx: &Context, beads: usize) -> Option<f64> {
+    let r = fibre0_bead_radius(ctx)?;
+    let length = lookup(ctx.derived, "fibre.0.length")?;
+    let touching = (length - 2.0 * r * (beads as f64 - 1.0)).abs() <= 1e-9 * length;
+    (ctx.scene.dimensions == 2 && beads >= 2 && touching).then(|| stokes::chain_bretherton(beads).0)
 }
 
 /// `fibre.0.bead_radius` of the scene.
@@ -269,12 +280,26 @@ pub fn compute(
                     .beads_per_fibre
                     .first()
                     .ok_or("the scene has no fibre")?;
-                let mut m = Metric::with_reference(
-                    gamma * period,
-                    crate::reference::jeffery::chain_period_gamma(n),
-                    "Jeffery, gamma T = 2 pi (e + 1/e) with the equivalent ellipse e = 1.14 \
-                     N_b^0.844 of Harris & Pittman (L2020 appendix B)",
-                );
+                let harris_pittman = crate::reference::jeffery::chain_period_gamma(n);
+                let mut m = match stokes_2d_chain(ctx, n) {
+                    Some(b) => {
+                        let mut m = Metric::with_reference(
+                            gamma * period,
+                            stokes::period_gamma(b),
+                            "2D Stokes flow past the same rigid chain of touching discs, \
+                             unbounded, sharp surfaces (boundary integral solution, \
+                             coordinator/src/reference/stokes_chain_2d.rs)",
+                        );
+                        m.extra.insert("harris_pittman".into(), harris_pittman);
+                        m
+                    }
+                    None => Metric::with_reference(
+                        gamma * period,
+                        harris_pittman,
+                        "Jeffery, gamma T = 2 pi (e + 1/e) with the equivalent ellipse e = 1.14 \
+                         N_b^0.844 of Harris & Pittman (L2020 appendix B)",
+                    ),
+                };
                 m.extra.insert(
                     "reference_md_table".into(),
                     crate::reference::jeffery::chain_period_gamma_table(n),
@@ -374,6 +399,12 @@ fn orbit_metrics(ctx: &Context) -> Result<BTreeMap<&'static str, Metric>, String
             m
         }
     };
+    if let Some(b) = stokes_2d_chain(ctx, n) {
+        fit.extra.insert(
+            "stokes_2d_aspect_ratio".into(),
+            1.0 / stokes::equivalent_aspect_ratio(b),
+        );
+    }
     if let Some(f) = &a.jeffery_fit {
         fit.extra.insert("rms_residual".into(), f.rms_residual);
         fit.extra.insert("coefficient".into(), f.coefficient);

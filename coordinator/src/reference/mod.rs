@@ -3,3 +3,4 @@ pub mod cylinder;
 pub mod elastica;
 pub mod jeffery;
 pub mod periodic_array;
+pub mod stokes_chain_2d;
