@@ -293,7 +293,9 @@ impl Component for FibreComponent {
                 }
                 spm_exchange::ratios(profile, scene.fluid_density, r, dims, f.mass, f.inertia)
             });
-            if let Some(r) = exchange {
+            // Clamped beads do not take the exchange's impulses; a fully clamped fibre has
+            // nothing to destabilise.
+            if let (Some(r), false) = (exchange, cfg.clamp.len() == cfg.beads) {
                 spm_exchange::check(&format!("fibre.{n}"), r, cfg.density)
                     .map_err(ComponentError)?;
             }
@@ -1092,6 +1094,45 @@ mod tests {
         assert!(close(out[4].angular_velocity, [0.0, 0.0, 0.25 / i]));
         assert!(diag(&r, "max_speed") > 0.0);
         assert_eq!(diag(&r, "max_net_force"), 0.0);
+    }
+
+    /// Under SPM: beads whose profile's fluid outweighs them are refused (here r_b = 2 with
+    /// the default xi = 1, xi_c = 3 in 2D: inertia ratio 3.66, mass ratio 1.37 at density 1);
+    /// a fully clamped fibre is not; the profile's inertia plus a density of 2 passes (ratios
+    /// 0.5 and 0.68).
+    #[test]
+    fn light_beads_under_spm_are_refused_unless_clamped_or_given_the_profile_inertia() {
+        let scene = |extra: &str| {
+            format!(
+                "dimensions = 2\n[time]\ndt = 1e-3\n[fluid]\nmethod = \"spm\"\n[[fibre]]\n\
+                 model = \"cohesive-beam\"\nbeads = 3\nbead_radius = 2\nyoungs_modulus = 1\n{extra}"
+            )
+        };
+        let refuse = |extra: &str| {
+            let mut x = InProcessExchange::new();
+            FibreComponent::new()
+                .configure(&scene(extra), &mut x)
+                .unwrap_err()
+                .0
+        };
+        let e = refuse("");
+        assert!(
+            e.contains("too light") && e.contains("moment of inertia"),
+            "{e}"
+        );
+        configure(&scene("clamp = [0, 1, 2]\n"));
+        let e = refuse("clamp = [0]\n");
+        assert!(e.contains("too light"), "{e}");
+        let (_, _, cfg) = configure(&scene("density = 2.0\nbead_inertia = \"profile\"\n"));
+        let ratio = |k: &str| {
+            cfg.derived
+                .iter()
+                .find(|(n, _)| n == k)
+                .map(|(_, v)| *v)
+                .unwrap()
+        };
+        assert!((ratio("fibre.0.profile_to_bead_inertia") - 0.5).abs() < 1e-12);
+        assert!(ratio("fibre.0.profile_to_bead_mass") < 2.0);
     }
 
     #[test]
