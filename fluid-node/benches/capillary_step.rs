@@ -9,8 +9,8 @@
 //! - 2D 256 x 200 with an 18-bead chain of r_b = 6, a droplet of R = 50 (xi = 2, xi_c = 5);
 //! - 3D 128 x 120 x 120 with a 10-bead chain of r_b = 6, a droplet of R = 30.
 //!
-//! The droplet diagnostics (pressure, radius) run only at reporting steps: the scene gives
-//! no `time.steps`, so never here. Throughput is per grid cell.
+//! The free energy and the droplet diagnostics (pressure, radius) run only at reporting
+//! steps: the scene gives no `time.steps`, so never here. Throughput is per grid cell.
 use cosim::{Component, Exchange, InProcessExchange, Phase, Port};
 use criterion::{criterion_group, criterion_main, Criterion};
 use fluid_node::FluidComponent;
