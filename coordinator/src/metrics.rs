@@ -67,14 +67,20 @@ pub(crate) fn number(v: Option<&toml::Value>) -> Option<f64> {
     v.and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
 }
 
+/// Longest chain the 2D Stokes reference is solved for: its dense solve grows as the cube
+/// of the beads (about a second at 10 beads), so longer chains fall back to the 3D law.
+const MAX_STOKES_BEADS: usize = 16;
+
 /// Bretherton constant of fibre 0 as a rigid chain in unbounded 2D Stokes flow
 /// ([`stokes::chain_bretherton`]), for a 2D scene whose fibre 0 is a straight chain of
-/// `beads` >= 2 touching beads; `None` otherwise (3D, or beads spaced apart).
+/// 2 to [`MAX_STOKES_BEADS`] touching beads; `None` otherwise (3D, beads spaced apart, or a
+/// longer chain).
 fn stokes_2d_chain(ctx: &Context, beads: usize) -> Option<f64> {
     let r = fibre0_bead_radius(ctx)?;
     let length = lookup(ctx.derived, "fibre.0.length")?;
     let touching = (length - 2.0 * r * (beads as f64 - 1.0)).abs() <= 1e-9 * length;
-    (ctx.scene.dimensions == 2 && beads >= 2 && touching).then(|| stokes::chain_bretherton(beads).0)
+    (ctx.scene.dimensions == 2 && (2..=MAX_STOKES_BEADS).contains(&beads) && touching)
+        .then(|| stokes::chain_bretherton(beads).0)
 }
 
 /// `fibre.0.bead_radius` of the scene.
