@@ -16,22 +16,17 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use fluid_node::FluidComponent;
 #[path = "common/spm_chain.rs"]
 mod spm_chain;
-use spm_chain::{centre, chain, grid_toml};
+use spm_chain::{centre, chain, exchange_and_penalty, grid_toml, spm_scene_head};
 
 fn bench_case(c: &mut Criterion, name: &str, dims: usize, grid: [usize; 3], beads: usize) {
     // The droplet sits at the centre of the box: R = 50 in 2D, 30 in 3D.
     let half = [grid[0] / 2, grid[1] / 2, grid[2] / 2];
-    let (grid_toml, centre_toml, radius) = (
-        grid_toml(dims, grid),
-        grid_toml(dims, half),
-        if dims == 2 { 50 } else { 30 },
-    );
+    let (centre_toml, radius) = (grid_toml(dims, half), if dims == 2 { 50 } else { 30 });
     let scene = format!(
-        "dimensions = {dims}\n[time]\ndt = 0.5\n[fluid]\nmethod = \"spm\"\ngrid = {grid_toml}\n\
-         viscosity = 1.0\nxi = 2\nxi_cutoff = 5\n\
-         [fluid.binary]\nxi = 2\ne0 = 0.1\nmobility = 1\ninitial = \"droplet\"\n\
+        "{}[fluid.binary]\nxi = 2\ne0 = 0.1\nmobility = 1\ninitial = \"droplet\"\n\
          centre = {centre_toml}\nradius = {radius}\n\
-         [[fibre]]\nbeads = {beads}\nbead_radius = 6\naffinity = 0.3\n"
+         [[fibre]]\nbeads = {beads}\nbead_radius = 6\naffinity = 0.3\n",
+        spm_scene_head(dims, grid)
     );
     let mut comp = FluidComponent::new();
     let mut x = InProcessExchange::new();
@@ -46,12 +41,7 @@ fn bench_case(c: &mut Criterion, name: &str, dims: usize, grid: [usize; 3], bead
             let at_n1 = chain(beads, centre, dims, n + 1);
             x.publish_states(Port::BeadStates, n, &at_n).unwrap();
             let pf = comp.run_phase(n, Phase::FluidPhaseField, &mut x).unwrap();
-            x.publish_states(Port::BeadStates, n + 1, &at_n1).unwrap();
-            comp.run_phase(n, Phase::FluidMomentumExchange, &mut x)
-                .unwrap();
-            x.read_impulses(Port::BeadImpulses, &mut imp).unwrap();
-            x.publish_states(Port::BeadStates, n + 1, &at_n1).unwrap();
-            let r = comp.run_phase(n, Phase::FluidPenalty, &mut x).unwrap();
+            let r = exchange_and_penalty(&mut comp, &mut x, n, &at_n1, &mut imp);
             n += 1;
             std::hint::black_box((pf, r))
         })

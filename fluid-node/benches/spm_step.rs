@@ -7,18 +7,17 @@
 //! - 3D 128 x 120 x 120 with a 10-bead chain of r_b = 6 (L2020's 3D grid, xi = 2, xi_c = 5).
 //!
 //! Throughput is per grid cell.
-use cosim::{Component, Exchange, InProcessExchange, Phase, Port};
+use cosim::{Component, InProcessExchange};
 use criterion::{criterion_group, criterion_main, Criterion};
 use fluid_node::FluidComponent;
 #[path = "common/spm_chain.rs"]
 mod spm_chain;
-use spm_chain::{centre, chain, grid_toml};
+use spm_chain::{centre, chain, exchange_and_penalty, spm_scene_head};
 
 fn bench_case(c: &mut Criterion, name: &str, dims: usize, grid: [usize; 3], beads: usize) {
-    let grid_toml = grid_toml(dims, grid);
     let scene = format!(
-        "dimensions = {dims}\n[time]\ndt = 0.5\n[fluid]\nmethod = \"spm\"\ngrid = {grid_toml}\n\
-         viscosity = 1.0\nxi = 2\nxi_cutoff = 5\n[[fibre]]\nbeads = {beads}\nbead_radius = 6\n"
+        "{}[[fibre]]\nbeads = {beads}\nbead_radius = 6\n",
+        spm_scene_head(dims, grid)
     );
     let mut comp = FluidComponent::new();
     let mut x = InProcessExchange::new();
@@ -30,12 +29,7 @@ fn bench_case(c: &mut Criterion, name: &str, dims: usize, grid: [usize; 3], bead
     group.bench_function(name, |b| {
         b.iter(|| {
             let s = chain(beads, centre, dims, n);
-            x.publish_states(Port::BeadStates, n + 1, &s).unwrap();
-            comp.run_phase(n, Phase::FluidMomentumExchange, &mut x)
-                .unwrap();
-            x.read_impulses(Port::BeadImpulses, &mut imp).unwrap();
-            x.publish_states(Port::BeadStates, n + 1, &s).unwrap();
-            let r = comp.run_phase(n, Phase::FluidPenalty, &mut x).unwrap();
+            let r = exchange_and_penalty(&mut comp, &mut x, n, &s, &mut imp);
             n += 1;
             std::hint::black_box(r)
         })

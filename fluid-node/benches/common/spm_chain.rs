@@ -1,8 +1,12 @@
-//! What the SPM benches share: the prescribed chain of beads, the grid in scene syntax, and
-//! the criterion group settings (per-cell throughput).
-use cosim::BeadState;
+//! What the SPM benches share: the prescribed chain of beads, the scene's fluid table, the
+//! momentum exchange and penalty of a step, and the criterion group settings (per-cell
+//! throughput).
+use cosim::{
+    BeadImpulse, BeadState, Component, Exchange, InProcessExchange, Phase, PhaseReport, Port,
+};
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion, Throughput};
+use fluid_node::FluidComponent;
 use std::time::Duration;
 
 /// A straight chain of `beads` beads of r_b = 6 (touching) along x through `centre`,
@@ -54,4 +58,31 @@ pub fn group<'a>(
         .measurement_time(Duration::from_secs(if dims == 3 { 4 } else { 2 }));
     group.throughput(Throughput::Elements(grid.iter().product::<usize>() as u64));
     group
+}
+
+/// The scene up to the end of `[fluid]`: an SPM fluid on `grid` (viscosity 1, xi = 2,
+/// xi_c = 5, dt = 0.5), ready for more fluid keys or tables.
+pub fn spm_scene_head(dims: usize, grid: [usize; 3]) -> String {
+    format!(
+        "dimensions = {dims}\n[time]\ndt = 0.5\n[fluid]\nmethod = \"spm\"\ngrid = {}\n\
+         viscosity = 1.0\nxi = 2\nxi_cutoff = 5\n",
+        grid_toml(dims, grid)
+    )
+}
+
+/// The SPM half of step `n` once the bead states at n+1 are known (L2020 eqs. 35-38): states
+/// published, momentum exchange, impulses read back into `imp`, states published again,
+/// penalty. The penalty's report.
+pub fn exchange_and_penalty(
+    comp: &mut FluidComponent,
+    x: &mut InProcessExchange,
+    n: u64,
+    states: &[BeadState],
+    imp: &mut Vec<BeadImpulse>,
+) -> PhaseReport {
+    x.publish_states(Port::BeadStates, n + 1, states).unwrap();
+    comp.run_phase(n, Phase::FluidMomentumExchange, x).unwrap();
+    x.read_impulses(Port::BeadImpulses, imp).unwrap();
+    x.publish_states(Port::BeadStates, n + 1, states).unwrap();
+    comp.run_phase(n, Phase::FluidPenalty, x).unwrap()
 }
