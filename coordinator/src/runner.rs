@@ -298,6 +298,14 @@ fn largest_load(scene: &LoadedScene) -> f64 {
 
 /// Run a scene to the end, writing `out/run.mcap` and `out/summary.json`.
 pub fn run(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError> {
+    // Drive the run from a thread of rayon's pool: with the components linked in, every
+    // parallel loop of the fluid's step then starts on a worker instead of handing its work
+    // to the pool and sleeping until it is done (two context switches per loop, about a
+    // hundred per 2D step). The fluid-node process does the same (src/bin/fluid-node.rs).
+    rayon::scope(|_| run_on_this_thread(scene, opts))
+}
+
+fn run_on_this_thread(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError> {
     INTERRUPTED.store(false, Ordering::SeqCst);
     writable_dir(&opts.out)?;
     let plan = schedule::plan(scene).map_err(fail)?;

@@ -27,11 +27,13 @@ fn bench_case(c: &mut Criterion, name: &str, dims: usize, grid: [usize; 3], bead
     let mut imp = Vec::with_capacity(beads);
     let mut group = spm_chain::group(c, "spm_step", dims, grid);
     group.bench_function(name, |b| {
-        b.iter(|| {
-            let s = chain(beads, centre, dims, n);
-            let r = exchange_and_penalty(&mut comp, &mut x, n, &s, &mut imp);
-            n += 1;
-            std::hint::black_box(r)
+        spm_chain::on_pool_thread(|| {
+            b.iter(|| {
+                let s = chain(beads, centre, dims, n);
+                let r = exchange_and_penalty(&mut comp, &mut x, n, &s, &mut imp);
+                n += 1;
+                std::hint::black_box(r)
+            })
         })
     });
     group.finish();

@@ -197,10 +197,14 @@ impl NodeClient {
             .map_err(|e| lost(format!("cannot wake the node: {e:?}")))?;
 
         let start = Instant::now();
+        let kind = super::wait_kind(command);
         let reply = |bytes: &[u8]| Reply::from_bytes(bytes).map_err(&lost);
         let receive = || pending.receive().map_err(|e| lost(format!("{e:?}")));
-        if let Some(r) = self.poller.poll(receive)? {
-            return reply(r.payload());
+        if !self.poller.skips_polling(kind) {
+            if let Some(r) = self.poller.poll(receive)? {
+                self.poller.record(kind, start.elapsed());
+                return reply(r.payload());
+            }
         }
         self.poller.blocked();
         loop {
@@ -218,6 +222,7 @@ impl NodeClient {
                 Err(e) => return Err(lost(format!("cannot wait for a reply: {e:?}"))),
             }
             if let Some(r) = pending.receive().map_err(|e| lost(format!("{e:?}")))? {
+                self.poller.record(kind, start.elapsed());
                 return reply(r.payload());
             }
             check_alive(&mut self.process, &self.name)?;

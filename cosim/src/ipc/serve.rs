@@ -43,19 +43,26 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
         .map_err(IpcError::iox("create the control server"))?;
     let mut watch = Watch::new(node_name);
     let mut poller = super::Poller::default();
+    // The kind of the wait in progress: named by the command served before it.
+    let mut kind = 0;
 
     loop {
+        let waiting = std::time::Instant::now();
         let request = next_request(
             &server,
             &listener,
             &control,
             &exchange,
             &mut watch,
-            &mut poller,
+            (&mut poller, kind),
         )?;
+        poller.record(kind, waiting.elapsed());
         watch.seen_client = true;
         let (reply, done) = match Command::from_bytes(request.payload()) {
-            Ok(command) => crate::dispatch(component, &mut exchange, command),
+            Ok(command) => {
+                kind = super::wait_kind(&command);
+                crate::dispatch(component, &mut exchange, command)
+            }
             Err(message) => (Reply::Error(message), false),
         };
         let bytes = reply.to_bytes();
@@ -85,18 +92,21 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
     }
 }
 
-/// Poll briefly, then block on the wake event in slices, checking on the coordinator.
+/// Poll briefly (unless this kind of wait is long), then block on the wake event in slices,
+/// checking on the coordinator.
 fn next_request(
     server: &Server<Svc, [u8], (), [u8], ()>,
     listener: &Listener<Svc>,
     control: &Control,
     exchange: &IpcExchange,
     watch: &mut Watch,
-    poller: &mut super::Poller,
+    (poller, kind): (&mut super::Poller, usize),
 ) -> Result<Request, IpcError> {
     let receive = || server.receive().map_err(IpcError::iox("receive a request"));
-    if let Some(r) = poller.poll(receive)? {
-        return Ok(r);
+    if !poller.skips_polling(kind) {
+        if let Some(r) = poller.poll(receive)? {
+            return Ok(r);
+        }
     }
     poller.blocked();
     loop {
