@@ -198,8 +198,8 @@ impl OrbitAnalysis {
         let mut out = vec![
             ("net_rotation_deg", self.net_rotation_deg),
             ("half_turns", self.half_turns.len() as f64),
-            ("min_end_to_end_over_length", self.min_ratio),
-            ("final_end_to_end_over_length", self.final_ratio),
+            ("min_end_to_end_over_contour", self.min_ratio),
+            ("final_end_to_end_over_contour", self.final_ratio),
         ];
         let optional = [
             ("half_turn_period", self.half_turn_period),
