@@ -60,6 +60,10 @@ enum Cmd {
         /// Output directory (default: the one the study file names).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Rebuild the table and plots from the runs an earlier `study` of this file left in
+        /// runs/study/NAME/, without running anything.
+        #[arg(long)]
+        replot: bool,
     },
 }
 
@@ -161,8 +165,9 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             }
             Ok(())
         }
-        Cmd::Study { study, out } => {
-            let report = study::run_file(&study, out.as_deref()).map_err(|e| e.to_string())?;
+        Cmd::Study { study, out, replot } => {
+            let report =
+                study::run_file(&study, out.as_deref(), replot).map_err(|e| e.to_string())?;
             println!("{report}");
             Ok(())
         }

@@ -13,7 +13,17 @@
 //! [[vary]]                                 # variants: the product over all [[vary]]
 //! keys = ["fibre.0.beads", "fibre.0.loads.0.force"]   # or key = "..." with plain values
 //! values = [[5, [0.0, -1.0, 0.0]], [10, [0.0, -0.2, 0.0]]]
+//! [convergence]                            # optional: no analytic reference, a refinement
+//! key = "fibre.0.beads"                    # varied key giving the resolution (larger = finer)
+//! order = 1.0                              # assumed order of convergence (default 1)
 //! ```
+//!
+//! With `[convergence]` the reference of every variant is the Richardson extrapolation of the
+//! metric from the two finest variants, `v_f + (v_f - v_c) / ((n_f / n_c)^order - 1)`, so the
+//! table and the plot show each variant's distance from the estimated converged value.
+//!
+//! `coordinator study FILE --replot` rebuilds the table and plots from the runs a previous
+//! `study` left in `runs/study/<name>/<variant>/summary.json`, without running anything.
 use crate::runner::{self, RunOptions};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -39,6 +49,25 @@ pub struct Study {
     /// A regime map: every variant at (x, y), coloured by the metric's label.
     #[serde(default)]
     pub diagram: Option<Diagram>,
+    /// A refinement study: the reference is extrapolated from the two finest variants.
+    #[serde(default)]
+    pub convergence: Option<Convergence>,
+}
+
+/// `[convergence]`: which varied key measures the resolution, and the assumed order.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Convergence {
+    /// A key of a `[[vary]]` entry whose values grow as the discretisation is refined
+    /// (points per bead radius, beads per fibre, ...).
+    pub key: String,
+    /// Order p of the error, `v(n) - v_inf ~ n^-p`.
+    #[serde(default = "first_order")]
+    pub order: f64,
+}
+
+fn first_order() -> f64 {
+    1.0
 }
 
 /// `[diagram]`: axes of a regime map (e.g. S2023 Fig. 10a, the orbit over K and C), each the
@@ -112,10 +141,13 @@ pub struct Row {
     pub class: Option<String>,
     /// The diagram's coordinates, read from the summary's derived values.
     pub point: Option<(f64, f64)>,
+    /// The value of the `[convergence]` key in this variant.
+    pub resolution: Option<f64>,
 }
 
-/// Read and run a study file; returns the markdown table.
-pub fn run_file(path: &Path, out: Option<&Path>) -> Result<String, String> {
+/// Read and run a study file (or, with `replot`, reuse its previous runs); returns the
+/// markdown table.
+pub fn run_file(path: &Path, out: Option<&Path>, replot: bool) -> Result<String, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read study file {}: {e}", path.display()))?;
     let study: Study =
@@ -138,15 +170,16 @@ pub fn run_file(path: &Path, out: Option<&Path>) -> Result<String, String> {
     let out_dir = out
         .map(Path::to_path_buf)
         .unwrap_or_else(|| base.join(&study.output));
-    run(&study, &base.join(&study.scene), &out_dir)
+    run(&study, &base.join(&study.scene), &out_dir, replot)
 }
 
 fn toml_inline(v: &toml::Value) -> String {
     v.to_string()
 }
 
-/// Run every variant of `study` on `scene_path`; write `<name>.csv`, `.md`, `.png` to `out`.
-pub fn run(study: &Study, scene_path: &Path, out: &Path) -> Result<String, String> {
+/// Run every variant of `study` on `scene_path` (or read the summaries of an earlier run of
+/// it, `replot`); write `<name>.csv`, `.md`, `.png` to `out`.
+pub fn run(study: &Study, scene_path: &Path, out: &Path, replot: bool) -> Result<String, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let mut variants: Vec<Vec<(String, toml::Value)>> = vec![Vec::new()];
     for (i, v) in study.vary.iter().enumerate() {
@@ -199,14 +232,36 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path) -> Result<String, Strin
             .join("study")
             .join(&study.name)
             .join(i.to_string());
-        let opts = RunOptions::quiet(run_dir, !study.processes);
+        let resolution = match &study.convergence {
+            Some(c) => Some(
+                assignment
+                    .iter()
+                    .find(|(k, _)| *k == c.key)
+                    .and_then(|(_, v)| v.as_float().or(v.as_integer().map(|i| i as f64)))
+                    .ok_or_else(|| {
+                        format!(
+                            "convergence.key `{}` must be a varied key with numeric values",
+                            c.key
+                        )
+                    })?,
+            ),
+            None => None,
+        };
         eprintln!(
             "study {}: variant {}/{}: {label}",
             study.name,
             i + 1,
             variants.len()
         );
-        let result = match runner::run(&scene, &opts) {
+        let outcome = if replot {
+            read_summary(&run_dir.join("summary.json")).map_err(|e| runner::RunError {
+                message: format!("--replot: {e}"),
+            })
+        } else {
+            let opts = RunOptions::quiet(run_dir, !study.processes);
+            runner::run(&scene, &opts).map(|r| r.summary)
+        };
+        let summary = match outcome {
             Ok(r) => r,
             // A map over parameters meets variants the method cannot carry: keep the row
             // (with the reason on standard error) instead of losing the study.
@@ -222,12 +277,13 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path) -> Result<String, Strin
                     status: "failed".into(),
                     class: None,
                     point: None,
+                    resolution,
                 });
                 continue;
             }
             Err(e) => return Err(format!("variant {label}: {e}")),
         };
-        let s = &result.summary;
+        let s = &summary;
         let m = &s["metrics"][&study.metric];
         let point = study
             .diagram
@@ -243,12 +299,26 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path) -> Result<String, Strin
             status: s["status"].as_str().unwrap_or("").to_string(),
             class: m["label"].as_str().map(str::to_string),
             point,
+            resolution,
         });
+    }
+    let mut note = String::new();
+    if let Some(c) = &study.convergence {
+        let limit = extrapolate(&rows, c.order)?;
+        for r in rows.iter_mut().filter(|r| r.value.is_finite()) {
+            r.reference = Some(limit);
+            r.relative_error = Some(((r.value - limit) / limit).abs());
+        }
+        note = format!(
+            "\nReference: {limit:.6}, the Richardson extrapolation (order {}) of the two finest \
+             variants in `{}`; the relative error of each variant is its distance from it.\n",
+            c.order, c.key
+        );
     }
     let csv = render_csv(&rows);
     std::fs::write(out.join(format!("{}.csv", study.name)), &csv).map_err(|e| e.to_string())?;
     let title = study.title.clone().unwrap_or_else(|| study.name.clone());
-    let md = render_markdown(&title, &study.metric, &rows);
+    let md = render_markdown(&title, &study.metric, &rows) + &note;
     std::fs::write(out.join(format!("{}.md", study.name)), &md).map_err(|e| e.to_string())?;
     let points: Vec<crate::plot::CostPoint> = rows
         .iter()
@@ -290,6 +360,38 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path) -> Result<String, Strin
         )?;
     }
     Ok(md)
+}
+
+fn read_summary(path: &Path) -> Result<serde_json::Value, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        format!(
+            "cannot read {} (run the study once without --replot): {e}",
+            path.display()
+        )
+    })?;
+    serde_json::from_str(&text).map_err(|e| format!("{} is not JSON: {e}", path.display()))
+}
+
+/// The converged value estimated from the two finest completed variants: with
+/// v(n) = v_inf + a n^-p, v_inf = v_f + (v_f - v_c) / ((n_f / n_c)^p - 1).
+pub fn extrapolate(rows: &[Row], order: f64) -> Result<f64, String> {
+    let mut pts: Vec<(f64, f64)> = rows
+        .iter()
+        .filter_map(|r| Some((r.resolution?, r.value)))
+        .filter(|(n, v)| n.is_finite() && *n > 0.0 && v.is_finite())
+        .collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (Some(&(nf, vf)), Some(&(nc, vc))) = (pts.last(), pts.iter().rev().nth(1)) else {
+        return Err("[convergence] needs at least two completed variants".into());
+    };
+    let ratio = (nf / nc).powf(order);
+    if !(order > 0.0 && ratio > 1.0) {
+        return Err(format!(
+            "[convergence]: the two finest variants must differ in resolution and the order \
+             be positive (n {nc} and {nf}, order {order})"
+        ));
+    }
+    Ok(vf + (vf - vc) / (ratio - 1.0))
 }
 
 fn fmt_opt(v: Option<f64>) -> String {
@@ -339,4 +441,48 @@ pub fn render_markdown(title: &str, metric: &str, rows: &[Row]) -> String {
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(n: f64, v: f64) -> Row {
+        Row {
+            label: format!("n={n}"),
+            value: v,
+            reference: None,
+            relative_error: None,
+            wall_seconds: 1.0,
+            steps: 1,
+            status: "completed".into(),
+            class: None,
+            point: None,
+            resolution: Some(n),
+        }
+    }
+
+    /// v(n) = 2 + 3 n^-p sampled at three resolutions, in any order: the two finest give
+    /// v_inf = 2 to round-off for the matching order; assuming first order for second-order
+    /// data overshoots the limit (here 1.875, against 2 and a finest value of 2.083).
+    #[test]
+    fn richardson_limit_of_a_power_law() {
+        for p in [1.0, 2.0] {
+            let v = |n: f64| 2.0 + 3.0 * n.powf(-p);
+            let rows = [row(4.0, v(4.0)), row(2.0, v(2.0)), row(6.0, v(6.0))];
+            let limit = extrapolate(&rows, p).unwrap();
+            assert!((limit - 2.0).abs() < 1e-12, "order {p}: {limit}");
+        }
+        let v = |n: f64| 2.0 + 3.0 / (n * n);
+        let first = extrapolate(&[row(4.0, v(4.0)), row(6.0, v(6.0))], 1.0).unwrap();
+        assert!((first - 1.875).abs() < 1e-12, "{first}");
+    }
+
+    #[test]
+    fn richardson_needs_two_distinct_resolutions() {
+        assert!(extrapolate(&[row(4.0, 1.0)], 1.0).is_err());
+        assert!(extrapolate(&[row(4.0, 1.0), row(4.0, 1.1)], 1.0).is_err());
+        assert!(extrapolate(&[row(4.0, 1.0), row(f64::NAN, 1.1)], 1.0).is_err());
+        assert!(extrapolate(&[row(2.0, 1.0), row(4.0, 1.1)], 0.0).is_err());
+    }
 }
