@@ -111,12 +111,12 @@ fn fpd_advance_moves_the_beads_with_the_velocities_the_flow_gave() {
     let mut states = Vec::new();
     let header = x.read_states(Port::BeadStates, &mut states).unwrap();
     assert_eq!(header.step, 1);
-    for k in 0..4 {
+    for (k, ((s, r), vk)) in states.iter().zip(&before).zip(&v).enumerate() {
         for d in 0..3 {
             // R^{n+1} = R^n + dt V^{n+1} (S2023 section II C, step 3), exactly.
-            let expected = before[k][d] + 0.5 * v[k].velocity[d];
-            assert_eq!(states[k].position[d], expected, "bead {k}, component {d}");
-            assert_eq!(states[k].velocity[d], v[k].velocity[d]);
+            let expected = r[d] + 0.5 * vk.velocity[d];
+            assert_eq!(s.position[d], expected, "bead {k}, component {d}");
+            assert_eq!(s.velocity[d], vk.velocity[d]);
         }
     }
 }

@@ -134,7 +134,7 @@ fn run(case: &Case, re: f64) -> Result<(f64, f64, u64, f64, usize), String> {
         }
         // The fluid's force on the bead is minus the holding force.
         sum += -force[0][0];
-        if step % window == 0 {
+        if step.is_multiple_of(window) {
             let mean = cd_of(sum / window as f64);
             sum = 0.0;
             if !mean.is_finite() {

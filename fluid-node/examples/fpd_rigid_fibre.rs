@@ -136,7 +136,7 @@ fn main() {
             p[0] += v[0];
             p[1] += v[1];
         }
-        if step % every == 0 {
+        if step.is_multiple_of(every) {
             let (_, th) = fit(&pos, &offsets, nx as f64);
             // The fibre's angle is defined modulo pi; unwrap against the last sample.
             let mut dth = th - theta_prev;

@@ -53,7 +53,7 @@ impl Reporting {
     /// Whether the diagnostics of step `step` (n -> n+1) are logged.
     pub fn due(&self, step: u64) -> bool {
         let n = step + 1;
-        self.steps == Some(n) || self.interval.is_some_and(|i| n % i == 0)
+        self.steps == Some(n) || self.interval.is_some_and(|i| n.is_multiple_of(i))
     }
 }
 

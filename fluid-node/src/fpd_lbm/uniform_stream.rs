@@ -45,7 +45,8 @@ impl UniformStream {
     ) -> Result<Self, String> {
         let u = raw.velocity;
         let mach = u.abs() * 3f64.sqrt();
-        if !(mach <= max_mach) {
+        // A NaN velocity is refused too.
+        if mach.is_nan() || mach > max_mach {
             return Err(format!(
                 "fluid.stream.velocity = {u}: Mach number |U| sqrt 3 = {mach:.3} exceeds the \
                  lattice's limit {max_mach}; lower U (and the viscosity, to keep Re)"
