@@ -113,7 +113,8 @@ fn full_encapsulation_stays_bounded_and_conserves_psi() {
 /// limit 2, so the scene is refused before step 0 with the ratio and both cures named
 /// (before the check, this run blew up at step 48 with the CFL error). With
 /// `bead_inertia = "profile"` the ratio is 1 / 0.8 = 1.25 and the same beads run 2000 steps
-/// bounded.
+/// bounded; so do they with their solid inertia under the implicit exchange
+/// (`exchange = "implicit"`, fibre-node/src/fibre.rs), which has no such limit.
 #[test]
 fn light_beads_are_refused_or_given_the_inertia_of_their_profile() {
     let light = [
@@ -133,9 +134,18 @@ fn light_beads_are_refused_or_given_the_inertia_of_their_profile() {
         "limit 2",
         "fibre.0.density to at least",
         "fibre.0.bead_inertia = \"profile\"",
+        "fibre.0.exchange = \"implicit\"",
     ] {
         assert!(e.contains(s), "{s:?} missing from: {e}");
     }
+    let mut implicit = light.to_vec();
+    implicit.push(("fibre.0.exchange", "\"implicit\""));
+    let s = run_in_process(
+        &config("capillary/tumbling_2d.toml"),
+        &set(&implicit),
+        "capillary_light_beads_implicit_exchange",
+    );
+    assert_bounded(&s);
     let mut profile = light.to_vec();
     profile.push(("fibre.0.bead_inertia", "\"profile\""));
     let s = run_in_process(

@@ -208,6 +208,7 @@ impl Component for FibreComponent {
                 param("fibre.N.bending_stiffness", "mass length^2 / time^2", Some("E I / l0"), "bead-spring k_b (U_b = -k_b sum t_i+1 . t_i)"),
                 param("fibre.N.affinity", "1", Some("0.0"), "wetting affinity psi0 of the fibre (read by the fluid node)"),
                 param("fibre.N.bending_number", "1", Some("none"), "bead-spring under fpd-lbm: bending number K = 2 k_b / (eta_f gamma l_c^2) (S2023 eq. 18), converted to k_b with fluid.viscosity, the wall shear gamma = (top - bottom) / ny and l_c = N d; excludes bending_stiffness"),
+                param("fibre.N.exchange", "1", Some("\"explicit\""), "SPM momentum exchange: \"explicit\" (the fluid's impulse added as it comes, L2020 eqs. 35-36; beads must be at least half as heavy as their profile's fluid) or \"implicit\" (the same impulse taken as a drag towards the profile's fluid velocity at the new bead velocity: momentum-conserving with the penalty, stable for light beads and stiff fibres)"),
                 param("fibre.N.bead_inertia", "1", Some("\"solid\""), "bead moment of inertia: \"solid\" (sharp disc or sphere, as fibre.N.density says) or \"profile\" (density times the moment of the bead's smoothed profile, SPM only); under SPM a bead whose profile fluid has 2 or more times its mass or moment of inertia is refused (explicit exchange limit)"),
                 param("fibre.N.beam_forces", "1", Some("\"paper\""), "cohesive beam: \"paper\" (L2020 eqs. 11-24) or \"energy-consistent\" (the same to leading order, exactly conservative to third order in the bead angles)"),
             ],
@@ -291,11 +292,16 @@ impl Component for FibreComponent {
                 if cfg.profile_inertia {
                     f.inertia = profile.mass_inertia(cfg.density, r, dims).1;
                 }
+                if cfg.implicit_exchange {
+                    let (m, i) = profile.mass_inertia(scene.fluid_density, r, dims);
+                    f.implicit_exchange = Some([m, i]);
+                }
                 spm_exchange::ratios(profile, scene.fluid_density, r, dims, f.mass, f.inertia)
             });
             // Clamped beads do not take the exchange's impulses; a fully clamped fibre has
-            // nothing to destabilise.
-            if let (Some(r), false) = (exchange, cfg.clamp.len() == cfg.beads) {
+            // nothing to destabilise; the implicit exchange is stable for any ratio.
+            let explicit = !cfg.implicit_exchange;
+            if let (Some(r), false, true) = (exchange, cfg.clamp.len() == cfg.beads, explicit) {
                 spm_exchange::check(&format!("fibre.{n}"), r, cfg.density)
                     .map_err(ComponentError)?;
             }

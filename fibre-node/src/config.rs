@@ -69,6 +69,10 @@ pub struct FibreConfig {
     /// `bead_inertia = "profile"`: the bead's moment of inertia is `density` times that of
     /// its smoothed profile (SPM only); `"solid"` (default): that of a sharp disc or sphere.
     pub profile_inertia: bool,
+    /// `exchange = "implicit"`: the SPM momentum exchange acts as a drag towards the fluid's
+    /// velocity in the bead's profile, taken implicitly (see `crate::fibre`); `"explicit"`
+    /// (default): the fluid's impulse is added as it comes (L2020 eqs. 35-36).
+    pub implicit_exchange: bool,
 }
 
 /// What the fibre node reads from a scene.
@@ -149,6 +153,7 @@ struct RawFibre {
     bending_number: Option<f64>,
     beam_forces: Option<String>,
     bead_inertia: Option<String>,
+    exchange: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -281,6 +286,12 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
     }
 
     for (n, f) in fibres.iter_mut().enumerate() {
+        if f.implicit_exchange && coupling != Coupling::Spm {
+            return Err(format!(
+                "fibre.{n}.exchange = \"implicit\": only the SPM fluid (fluid.method = \"spm\") \
+                 exchanges momentum with the beads; remove the key"
+            ));
+        }
         if f.profile_inertia && coupling != Coupling::Spm {
             return Err(format!(
                 "fibre.{n}.bead_inertia = \"profile\": only the SPM fluid (fluid.method = \"spm\") \
@@ -528,9 +539,19 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
             ))
         }
     };
+    let implicit_exchange = match raw.exchange.as_deref() {
+        None | Some("explicit") => false,
+        Some("implicit") => true,
+        Some(other) => {
+            return Err(format!(
+                "{p}.exchange: expected \"explicit\" or \"implicit\", got {other:?}"
+            ))
+        }
+    };
     Ok(FibreConfig {
         energy_consistent,
         profile_inertia,
+        implicit_exchange,
         model,
         beads,
         bead_radius,

@@ -38,6 +38,21 @@
 //! stability against the fluid coupling (spreading the predicted impulse and correcting only
 //! in the last kick does not: it goes unstable once the fluid's impulse is comparable to the
 //! bead's momentum). With one sub-step both passes are the plain update above.
+//!
+//! # Implicit exchange (`fibre.N.exchange = "implicit"`)
+//! The fluid's impulse is `J = m_phi (u_phi - U^n)`: `m_phi = rho ∫ phi_i` is the fluid in
+//! the bead's smoothed profile, `u_phi` its mean velocity after the fluid's step and `U^n` the
+//! velocity the last penalty imposed (L2020 eqs. 35-36; likewise `J_ang = I_phi (w_phi -
+//! Omega^n)` with `I_phi = rho ∫ phi_i d²`). Added as it comes, it is a drag evaluated at the
+//! old velocity: unstable when the bead is light against its profile (the ratio-2 limit of
+//! `crate::spm_exchange`) or vibrates faster than the fluid step samples it (the stiff chains
+//! of docs/validation/spm.md). The implicit exchange recovers `u_phi = U^n + J / m_phi` and
+//! takes each kick's share `s` of the drag at the new velocity,
+//! `M V' = M (V + h F / M) + s m_phi (u_phi - V')`, which damps but never overshoots. The
+//! bead then receives `m_phi (u_phi - U^{n+1})`, exactly the momentum the penalty takes from
+//! the fluid, where the explicit update gives `m_phi (u_phi - U^n)`; both agree in steady
+//! motion. `m_phi` and `I_phi` come from [`cosim::profile`] for a lone bead (overlapping
+//! profiles, which the fluid normalises, make the true values a little smaller).
 use crate::bead_spring::BeadSpring;
 use crate::cohesive_beam::{BeamForces, CohesiveBeam};
 use crate::config::{FibreConfig, ModelKind};
@@ -104,6 +119,10 @@ pub struct Fibre {
     pub predicted_angular_impulse: Vec<Vec3>,
     /// Bead states at the start of the step, kept by the predictor for the corrector.
     pub start: Vec<BeadKinematics>,
+    /// `[m_phi, I_phi]`, the mass and moment of inertia of the fluid in a bead's smoothed
+    /// profile, when the SPM exchange is taken implicitly (`fibre.N.exchange = "implicit"`,
+    /// module documentation); `None`: the impulses are added as they come.
+    pub implicit_exchange: Option<[f64; 2]>,
     /// Gains `[k_p, k_i]` of the force that holds the clamped beads under FPD (see
     /// [`Fibre::hold_under_fpd`]); zero otherwise.
     pub hold_gains: [f64; 2],
@@ -244,6 +263,7 @@ impl Fibre {
             hydrodynamic: with_fluid,
             predicted_impulse: vec![Vec3::zeros(); n],
             predicted_angular_impulse: vec![Vec3::zeros(); n],
+            implicit_exchange: None,
             hold_gains: [0.0; 2],
             held_displacement: vec![Vec3::zeros(); n],
             probe: if cfg.internal_damping > 0.0 {
@@ -402,10 +422,28 @@ impl Fibre {
                     self.predicted_impulse[k] / n,
                     self.predicted_angular_impulse[k] / n,
                 )),
-                HydroKick::Share(imp, share) => Some((
-                    Vec3::from(imp[k].impulse) * share,
-                    Vec3::from(imp[k].angular_impulse) * share,
-                )),
+                HydroKick::Share(imp, share) => match self.implicit_exchange {
+                    // The fluid's impulse is m_phi (u_phi - U^n): the drag towards u_phi,
+                    // with this kick's share of m_phi, taken at the new velocity.
+                    Some([m_phi, i_phi]) => {
+                        let (u0, w0) = match self.start.get(k) {
+                            Some(b) if self.start.len() == self.pos.len() => (b.vel, b.omega),
+                            _ => (v, w),
+                        };
+                        let target = u0 + Vec3::from(imp[k].impulse) / m_phi;
+                        let (a, b) = (share * m_phi, share * i_phi);
+                        nv = (self.mass * nv + a * target) / (self.mass + a);
+                        if self.rotates {
+                            let spin = w0 + Vec3::from(imp[k].angular_impulse) / i_phi;
+                            nw = (self.inertia * nw + b * spin) / (self.inertia + b);
+                        }
+                        None
+                    }
+                    None => Some((
+                        Vec3::from(imp[k].impulse) * share,
+                        Vec3::from(imp[k].angular_impulse) * share,
+                    )),
+                },
             };
             if let Some((j, l)) = share {
                 nv += j * inv_m;
@@ -731,6 +769,53 @@ mod tests {
         eprintln!("energy range: energy-consistent {big:.2e} (amplitude x0.1: {small:.2e}); paper {pbig:.2e} (x0.1: {psmall:.2e})");
         assert!(big < 0.01);
         assert!((big - small).abs() < 0.1 * small);
+    }
+
+    /// The implicit exchange (module documentation) on a lone bead four times lighter than
+    /// its profile's fluid, the fluid at rest around it: the fluid's impulse each step is
+    /// `m_phi (0 - U^n)`. Added explicitly it multiplies the velocity by 1 - 4 = -3 per step;
+    /// taken implicitly by M / (M + m_phi) = 1/5, and the bead receives exactly
+    /// `m_phi (u_phi - U^{n+1})`, the momentum the penalty takes from the fluid. With four
+    /// sub-steps the decay is (1 + 1/4 * 4)^-4 = 1/16 per step, still without overshoot.
+    #[test]
+    fn implicit_exchange_is_the_drag_at_the_new_velocity() {
+        for (substeps, factor) in [(1usize, 0.2), (4, 1.0 / 16.0)] {
+            let scene = format!(
+                "dimensions = 2\n[time]\ndt = 0.5\n[fluid]\nmethod = \"spm\"\n[[fibre]]\n\
+                 model = \"bead-spring\"\nbeads = 1\nbead_radius = 1\nyoungs_modulus = 5\n\
+                 substeps = {substeps}\n"
+            );
+            let mut f = fibre(&scene);
+            let m = f.mass;
+            let m_phi = 4.0 * m;
+            let i_phi = 4.0 * f.inertia;
+            f.implicit_exchange = Some([m_phi, i_phi]);
+            f.vel[0] = Vec3::new(1.0, -0.5, 0.0);
+            f.omega[0] = Vec3::new(0.0, 0.0, 0.3);
+            for _ in 0..3 {
+                let (u0, w0) = (f.vel[0], f.omega[0]);
+                let imp = [BeadImpulse {
+                    impulse: (-m_phi * u0).into(),
+                    angular_impulse: (-i_phi * w0).into(),
+                }];
+                f.advance_positions(0.5);
+                f.advance_velocities(0.5, Some(&imp), true);
+                let (u1, w1) = (f.vel[0], f.omega[0]);
+                assert!(
+                    (u1 - factor * u0).norm() < 1e-14 * u0.norm(),
+                    "{u1} vs {u0}"
+                );
+                assert!(
+                    (w1 - factor * w0).norm() < 1e-14 * w0.norm(),
+                    "{w1} vs {w0}"
+                );
+                if substeps == 1 {
+                    // The bead's momentum change is the drag at the new velocity.
+                    let gained = m * (u1 - u0);
+                    assert!((gained - m_phi * (Vec3::zeros() - u1)).norm() < 1e-14);
+                }
+            }
+        }
     }
 
     /// Sub-cycling with fluid impulses (module documentation): a stiff 2D dimer whose bead 0
