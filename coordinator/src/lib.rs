@@ -2,6 +2,7 @@
 //! in), enforces the order of the fractional step, logs to MCAP and writes the summary.
 //! `study` runs a scene over a grid of parameter values and reports error against cost.
 pub mod capillary_metrics;
+pub mod checkpoint;
 pub mod interface_metrics;
 pub mod links;
 pub mod mcap_log;

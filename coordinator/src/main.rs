@@ -37,6 +37,14 @@ enum Cmd {
         /// Seconds to wait for one reply of a node before ending the run as unresponsive.
         #[arg(long, value_name = "SECONDS", default_value_t = 600.0)]
         node_timeout: f64,
+        /// Save the run's full state to OUT/checkpoint every N steps, at the last step and
+        /// on Ctrl-C (SPM scenes and fibres alone; FPD fluids cannot be saved yet).
+        #[arg(long, value_name = "N", default_value_t = 0)]
+        checkpoint_interval: u64,
+        /// Continue the run from a checkpoint folder (OUT/checkpoint of an earlier run),
+        /// with the same scene; time.steps, [output] and [analysis] may differ.
+        #[arg(long, value_name = "DIR")]
+        resume: Option<PathBuf>,
     },
     /// Check a scene, print its effects, schedule and time-step limits; run nothing.
     Check {
@@ -94,6 +102,8 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             in_process,
             quiet,
             node_timeout,
+            checkpoint_interval,
+            resume,
         } => {
             if !(node_timeout.is_finite() && node_timeout > 0.0) {
                 return Err(format!(
@@ -107,6 +117,8 @@ fn execute(cmd: Cmd) -> Result<(), String> {
                 progress: !quiet,
                 verbose: !quiet,
                 node_timeout: std::time::Duration::from_secs_f64(node_timeout),
+                checkpoint_interval,
+                resume,
             };
             let result = runner::run(&scene, &opts)
                 .map_err(|e| format!("{e}\n(the log written so far is in {})", out.display()))?;

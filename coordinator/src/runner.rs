@@ -28,6 +28,11 @@ pub struct RunOptions {
     pub verbose: bool,
     /// How long to wait for one reply of a node before ending the run.
     pub node_timeout: std::time::Duration,
+    /// Write a checkpoint to `out/checkpoint` every this many steps (and at the last step);
+    /// 0: none.
+    pub checkpoint_interval: u64,
+    /// Continue from the checkpoint in this folder instead of starting at step 0.
+    pub resume: Option<PathBuf>,
 }
 
 impl RunOptions {
@@ -39,6 +44,8 @@ impl RunOptions {
             progress: false,
             verbose: false,
             node_timeout: links::DEFAULT_NODE_TIMEOUT,
+            checkpoint_interval: 0,
+            resume: None,
         }
     }
 }
@@ -476,14 +483,6 @@ fn drive(
     let beads = st.configured.beads_per_fibre.clone();
     let has_beads = !beads.is_empty();
     let mut states: Vec<BeadState> = Vec::new();
-    if has_beads {
-        exchange
-            .read_states(Port::BeadStates, &mut states)
-            .map_err(|e| fail(format!("reading the initial bead states: {e}")))?;
-        log.bead_states(0, 0.0, &beads, &radii, &states)
-            .map_err(fail)?;
-    }
-    let initial = states.clone();
     let track = has_beads
         && scene
             .scene
@@ -492,17 +491,39 @@ fn drive(
             .iter()
             .any(|m| crate::metrics::needs_trajectory(m));
     let mut trajectory = crate::trajectory::Trajectory::default();
-    if track {
+    let dt = scene.scene.time.dt;
+    let steps = scene.scene.time.steps;
+    let (first_step, initial) = match &opts.resume {
+        Some(dir) => {
+            let ck = resume(scene, dir, nodes, steps)?;
+            st.time = ck.time;
+            st.steps_done = ck.step;
+            trajectory = ck.trajectory.clone();
+            (ck.step, ck.initial_states())
+        }
+        None => (0, Vec::new()),
+    };
+    if has_beads {
+        exchange
+            .read_states(Port::BeadStates, &mut states)
+            .map_err(|e| fail(format!("reading the initial bead states: {e}")))?;
+        log.bead_states(first_step, st.time, &beads, &radii, &states)
+            .map_err(fail)?;
+    }
+    let initial = if opts.resume.is_some() {
+        initial
+    } else {
+        states.clone()
+    };
+    if track && opts.resume.is_none() {
         trajectory.push(0.0, &states, beads[0]);
     }
 
-    let dt = scene.scene.time.dt;
-    let steps = scene.scene.time.steps;
     let interval = scene.output_interval();
     let load_scale = largest_load(scene);
     let bar = progress_bar(opts.progress, steps);
     let mut status = "completed";
-    for step in 0..steps {
+    for step in first_step..steps {
         let mut report = Vec::new();
         for (&phase, &o) in plan.schedule.iter().zip(&owner) {
             let t0 = Instant::now();
@@ -568,6 +589,17 @@ fn drive(
             log.flush().map_err(fail)?;
         }
         bar.inc(1);
+        let every = opts.checkpoint_interval;
+        if every > 0 && ((step + 1) % every == 0 || step + 1 == steps || stop) {
+            let run = crate::checkpoint::RunCheckpoint::new(
+                step + 1,
+                st.time,
+                &scene.toml,
+                &initial,
+                &trajectory,
+            );
+            save_checkpoint(&opts.out.join("checkpoint"), &run, nodes)?;
+        }
         if stop {
             status = "interrupted";
             break;
@@ -604,6 +636,55 @@ fn drive(
         crate::metrics::compute(&scene.scene.analysis.metrics, &ctx, &mut st.dimensionless)
             .map_err(fail)?;
     Ok(status)
+}
+
+/// Ask every node for its state and write the checkpoint.
+fn save_checkpoint(
+    dir: &Path,
+    run: &crate::checkpoint::RunCheckpoint,
+    nodes: &mut [Node],
+) -> Result<(), RunError> {
+    let mut saved = Vec::with_capacity(nodes.len());
+    for n in nodes.iter_mut() {
+        let name = n.link.name().to_string();
+        match n.link.call(&Command::SaveState) {
+            Ok(Reply::State(bytes)) => saved.push((name, bytes)),
+            Ok(other) => {
+                return Err(fail(format!(
+                    "checkpoint at step {}: node `{name}` answered {other:?} to save-state",
+                    run.step
+                )))
+            }
+            Err(e) => return Err(fail(format!("checkpoint at step {}: {e}", run.step))),
+        }
+    }
+    crate::checkpoint::write(dir, run, &saved).map_err(fail)
+}
+
+/// Read the checkpoint in `dir`, check it fits this scene, and restore every node from it.
+fn resume(
+    scene: &LoadedScene,
+    dir: &Path,
+    nodes: &mut [Node],
+    steps: u64,
+) -> Result<crate::checkpoint::RunCheckpoint, RunError> {
+    let ck = crate::checkpoint::read_run(dir).map_err(fail)?;
+    crate::checkpoint::check_scene(&ck, &scene.toml).map_err(fail)?;
+    if ck.step >= steps {
+        return Err(fail(format!(
+            "the checkpoint is at step {}, the scene asks for {steps} steps: nothing to resume \
+             (raise time.steps)",
+            ck.step
+        )));
+    }
+    for n in nodes.iter_mut() {
+        let name = n.link.name().to_string();
+        let state = crate::checkpoint::read_node(dir, &name).map_err(fail)?;
+        n.link
+            .call(&Command::RestoreState { state })
+            .map_err(|e| fail(format!("resuming node `{name}` at step {}: {e}", ck.step)))?;
+    }
+    Ok(ck)
 }
 
 /// At rest: the largest net force on a free bead is below `tol` times the largest load, and

@@ -1,7 +1,7 @@
 //! The orientation history of fibre 0, kept step by step for the orbit metrics.
 
 /// Angle of fibre 0's end-to-end vector in the x-y plane (unwrapped, radians) and its length.
-#[derive(Debug, Default, Clone)]
+#[derive(Debug, Default, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Trajectory {
     pub times: Vec<f64>,
     pub angles: Vec<f64>,

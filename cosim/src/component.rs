@@ -48,6 +48,14 @@ pub trait Component {
 
     /// Replace the full state by one from `save_state`.
     fn restore_state(&mut self, state: &[u8]) -> Result<(), ComponentError>;
+
+    /// After a successful [`Component::restore_state`] through [`dispatch`]: publish what
+    /// the other nodes read from this one at the step the state was saved (the fibre node's
+    /// bead states), so that a resumed run starts from the same publications as the run that
+    /// saved it. Default: nothing.
+    fn publish_restored(&mut self, _exchange: &mut dyn Exchange) -> Result<(), ComponentError> {
+        Ok(())
+    }
 }
 
 /// Run one command on a component. Returns the reply and whether the serving loop should end.
@@ -77,7 +85,12 @@ pub fn dispatch(
         ),
         Command::SaveState => (as_reply(component.save_state().map(Reply::State)), false),
         Command::RestoreState { state } => (
-            as_reply(component.restore_state(&state).map(|_| Reply::Ok)),
+            as_reply(
+                component
+                    .restore_state(&state)
+                    .and_then(|()| component.publish_restored(exchange))
+                    .map(|()| Reply::Ok),
+            ),
             false,
         ),
         Command::Shutdown => (Reply::Ok, true),

@@ -57,6 +57,10 @@ struct Run {
     forces_current: bool,
     /// `Some(n)`: positions of step n advanced, velocities pending.
     pending: Option<u64>,
+    /// The step of the last bead states published.
+    published: u64,
+    /// After `restore_state`: the step whose bead states to publish again.
+    restored_publication: Option<u64>,
     states: Vec<BeadState>,
     impulses: Vec<BeadImpulse>,
     /// FPD: the bead forces published in `FibreForces`.
@@ -70,6 +74,10 @@ struct SavedState {
     format: String,
     beads_per_fibre: Vec<usize>,
     pending: Option<u64>,
+    /// The step of the last bead states published (absent in states saved before it was
+    /// kept: nothing is republished then).
+    #[serde(default)]
+    published: Option<u64>,
     /// Per bead: position (3), orientation (4), velocity (3), angular velocity (3), the
     /// previous step's hydrodynamic impulse (3) and angular impulse (3), and the same 13
     /// kinematic values at the start of the step (the corrector's, see `fibre.rs`), as the
@@ -154,6 +162,7 @@ impl Run {
     fn publish(&mut self, step: u64, exchange: &mut dyn Exchange) -> Result<(), ComponentError> {
         fill_states(&self.fibres, &mut self.states);
         exchange.publish_states(Port::BeadStates, step, &self.states)?;
+        self.published = step;
         Ok(())
     }
 }
@@ -390,6 +399,8 @@ impl Component for FibreComponent {
             total_beads,
             forces_current: true,
             pending: None,
+            published: 0,
+            restored_publication: None,
             states: Vec::with_capacity(total_beads),
             impulses: Vec::with_capacity(total_beads),
             forces: Vec::with_capacity(if fpd { total_beads } else { 0 }),
@@ -541,6 +552,7 @@ impl Component for FibreComponent {
             format: STATE_FORMAT.into(),
             beads_per_fibre: run.fibres.iter().map(|f| f.len()).collect(),
             pending: run.pending,
+            published: Some(run.published),
             data,
         };
         serde_json::to_vec(&saved)
@@ -596,7 +608,18 @@ impl Component for FibreComponent {
         }
         run.forces_current = true;
         run.pending = saved.pending;
+        run.restored_publication = saved.published;
         Ok(())
+    }
+
+    fn publish_restored(&mut self, exchange: &mut dyn Exchange) -> Result<(), ComponentError> {
+        match self.run.as_mut() {
+            Some(run) => match run.restored_publication.take() {
+                Some(step) => run.publish(step, exchange),
+                None => Ok(()),
+            },
+            None => Ok(()),
+        }
     }
 }
 

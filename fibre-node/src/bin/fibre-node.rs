@@ -62,6 +62,9 @@ impl Component for FaultAt {
     fn restore_state(&mut self, state: &[u8]) -> Result<(), ComponentError> {
         self.inner.restore_state(state)
     }
+    fn publish_restored(&mut self, ex: &mut dyn Exchange) -> Result<(), ComponentError> {
+        self.inner.publish_restored(ex)
+    }
 }
 
 fn main() -> ExitCode {

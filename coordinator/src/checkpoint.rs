@@ -1,0 +1,198 @@
+//! Checkpoints: a run's full state at the end of a step, so that it can be resumed later and
+//! continue bit for bit as if it had not stopped (DESIGN.md: nodes save and restore their
+//! state, the FMI get/set-state analogue).
+//!
+//! A checkpoint is a folder (`OUT/checkpoint` by default):
+//! - `run.json`: the step and time reached, the scene text it was made with, the bead states
+//!   of step 0 and the orientation history of fibre 0 (what the metrics need from the part of
+//!   the run already done);
+//! - `NODE.state`: each node's `SaveState` answer, as it gave it.
+//!
+//! Writing replaces the folder's files one by one through temporary names, so that a run
+//! stopped while writing leaves the previous checkpoint's files or the new ones, never a
+//! truncated file.
+use crate::trajectory::Trajectory;
+use cosim::BeadState;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Format tag of `run.json`.
+pub const FORMAT: &str = "fibre-cosim checkpoint 1";
+
+/// What the coordinator keeps of a run at a checkpoint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunCheckpoint {
+    pub format: String,
+    /// Steps done: the run resumes with step `step` (0-based), at time `time`.
+    pub step: u64,
+    pub time: f64,
+    /// The scene text the run was configured with.
+    pub scene_toml: String,
+    /// Bead states of step 0, as bit patterns (13 per bead: position, orientation, velocity,
+    /// angular velocity).
+    pub initial: Vec<[u64; 13]>,
+    pub trajectory: Trajectory,
+}
+
+fn bits(s: &BeadState) -> [u64; 13] {
+    let mut out = [0u64; 13];
+    let values = s
+        .position
+        .iter()
+        .chain(&s.orientation)
+        .chain(&s.velocity)
+        .chain(&s.angular_velocity);
+    for (o, v) in out.iter_mut().zip(values) {
+        *o = v.to_bits();
+    }
+    out
+}
+
+fn state(b: &[u64; 13]) -> BeadState {
+    let v = |i: usize| f64::from_bits(b[i]);
+    BeadState {
+        position: [v(0), v(1), v(2)],
+        orientation: [v(3), v(4), v(5), v(6)],
+        velocity: [v(7), v(8), v(9)],
+        angular_velocity: [v(10), v(11), v(12)],
+    }
+}
+
+impl RunCheckpoint {
+    pub fn new(
+        step: u64,
+        time: f64,
+        scene_toml: &str,
+        initial: &[BeadState],
+        trajectory: &Trajectory,
+    ) -> Self {
+        Self {
+            format: FORMAT.into(),
+            step,
+            time,
+            scene_toml: scene_toml.into(),
+            initial: initial.iter().map(bits).collect(),
+            trajectory: trajectory.clone(),
+        }
+    }
+
+    pub fn initial_states(&self) -> Vec<BeadState> {
+        self.initial.iter().map(state).collect()
+    }
+}
+
+/// Write `run` and the nodes' states into `dir`.
+pub fn write(dir: &Path, run: &RunCheckpoint, nodes: &[(String, Vec<u8>)]) -> Result<(), String> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| format!("cannot create the checkpoint folder {}: {e}", dir.display()))?;
+    let json = serde_json::to_vec_pretty(run)
+        .map_err(|e| format!("cannot serialise the checkpoint: {e}"))?;
+    let mut files: Vec<(String, &[u8])> = vec![("run.json".into(), &json)];
+    files.extend(
+        nodes
+            .iter()
+            .map(|(n, s)| (format!("{n}.state"), s.as_slice())),
+    );
+    for (name, bytes) in files {
+        let path = dir.join(&name);
+        let tmp = dir.join(format!(".{name}.tmp"));
+        std::fs::write(&tmp, bytes)
+            .and_then(|()| std::fs::rename(&tmp, &path))
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Read `run.json` from `dir`.
+pub fn read_run(dir: &Path) -> Result<RunCheckpoint, String> {
+    let path = dir.join("run.json");
+    let text = std::fs::read(&path).map_err(|e| {
+        format!(
+            "cannot read {} (resume from the checkpoint folder a run wrote with \
+             --checkpoint-interval): {e}",
+            path.display()
+        )
+    })?;
+    let run: RunCheckpoint = serde_json::from_slice(&text)
+        .map_err(|e| format!("{} is not a checkpoint: {e}", path.display()))?;
+    if run.format != FORMAT {
+        return Err(format!(
+            "{} has format {:?}, this build reads {FORMAT:?}",
+            path.display(),
+            run.format
+        ));
+    }
+    Ok(run)
+}
+
+/// Read node `name`'s saved state from `dir`.
+pub fn read_node(dir: &Path, name: &str) -> Result<Vec<u8>, String> {
+    let path = dir.join(format!("{name}.state"));
+    std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))
+}
+
+/// The scene without the keys a resumed run may change: `time.steps`, `[output]` and
+/// `[analysis]`. Everything else must be as the checkpoint was made.
+fn physics_of(scene_toml: &str) -> Result<toml::Table, String> {
+    let mut t: toml::Table = scene_toml
+        .parse()
+        .map_err(|e| format!("the scene is not valid TOML: {e}"))?;
+    if let Some(toml::Value::Table(time)) = t.get_mut("time") {
+        time.remove("steps");
+    }
+    t.remove("output");
+    t.remove("analysis");
+    Ok(t)
+}
+
+/// Refuse to resume a checkpoint with a scene that differs in more than the run length,
+/// the output and the analysis, naming the first difference.
+pub fn check_scene(checkpoint: &RunCheckpoint, scene_toml: &str) -> Result<(), String> {
+    let (a, b) = (physics_of(&checkpoint.scene_toml)?, physics_of(scene_toml)?);
+    if a == b {
+        return Ok(());
+    }
+    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+    keys.sort();
+    keys.dedup();
+    let first = keys
+        .into_iter()
+        .find(|k| a.get(*k) != b.get(*k))
+        .map_or(String::new(), |k| format!(" (first difference in `{k}`)"));
+    Err(format!(
+        "the scene differs from the one the checkpoint was made with{first}; a resumed run may \
+         change only time.steps, [output] and [analysis]"
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bead_states_survive_bit_for_bit() {
+        let s = BeadState {
+            position: [1.0 / 3.0, -0.0, f64::MIN_POSITIVE],
+            orientation: [0.1, 0.2, 0.3, 0.9],
+            velocity: [1e-300, 2.5, -7.0],
+            angular_velocity: [0.0, 0.0, std::f64::consts::PI],
+        };
+        let back = state(&bits(&s));
+        assert_eq!(bits(&back), bits(&s));
+    }
+
+    #[test]
+    fn a_resumed_scene_may_change_only_length_output_and_analysis() {
+        let base =
+            "[time]\ndt = 0.5\nsteps = 10\n[output]\ninterval = 5\n[fluid]\nviscosity = 1.0\n";
+        let c = RunCheckpoint::new(4, 2.0, base, &[], &Trajectory::default());
+        let longer = base
+            .replace("steps = 10", "steps = 40")
+            .replace("interval = 5", "interval = 2");
+        assert!(check_scene(&c, &longer).is_ok());
+        let e = check_scene(&c, &base.replace("dt = 0.5", "dt = 0.25")).unwrap_err();
+        assert!(e.contains("`time`"), "{e}");
+        let e = check_scene(&c, &base.replace("viscosity = 1.0", "viscosity = 2.0")).unwrap_err();
+        assert!(e.contains("`fluid`"), "{e}");
+    }
+}

@@ -1,0 +1,171 @@
+//! Checkpoint and resume (`coordinator run --checkpoint-interval N`, `--resume DIR`): a run
+//! stopped at a checkpoint and resumed ends in the same bits as the run that never stopped.
+mod common;
+use common::*;
+use coordinator::mcap_log::read_topic;
+use std::path::Path;
+
+/// Run `cfg` for `total` steps straight, and as `at` steps with a checkpoint plus a resumed
+/// run to `total`; returns both output folders.
+fn straight_and_resumed(
+    name: &str,
+    cfg: &Path,
+    overrides: &[&str],
+    total: u64,
+    at: u64,
+    extra: &[&str],
+) -> (std::path::PathBuf, std::path::PathBuf) {
+    let set = |steps: u64| -> Vec<String> {
+        overrides
+            .iter()
+            .map(|s| s.to_string())
+            .chain([format!("time.steps={steps}")])
+            .collect()
+    };
+    let straight = run_scene(&format!("{name}-straight"), cfg, &set(total), extra).unwrap();
+    let every = at.to_string();
+    let first: Vec<&str> = extra
+        .iter()
+        .copied()
+        .chain(["--checkpoint-interval", &every])
+        .collect();
+    let part = run_scene(&format!("{name}-part"), cfg, &set(at), &first).unwrap();
+    let ck = part.join("checkpoint");
+    let ck = ck.to_str().unwrap();
+    let second: Vec<&str> = extra.iter().copied().chain(["--resume", ck]).collect();
+    let resumed = run_scene(&format!("{name}-resumed"), cfg, &set(total), &second).unwrap();
+    (straight, resumed)
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+/// The same bits at the end: the last logged bead states, the final diagnostics (fluid and
+/// fibre) and the metrics, which need the history from before the checkpoint too.
+fn assert_same_end(a: &Path, b: &Path) {
+    let (sa, sb) = (summary(a), summary(b));
+    assert_eq!(sa["status"], "completed", "{sa}");
+    assert_eq!(sb["status"], "completed", "{sb}");
+    assert_eq!(sa["steps"], sb["steps"]);
+    assert_eq!(sa["time"], sb["time"]);
+    assert_eq!(sa["final_diagnostics"], sb["final_diagnostics"]);
+    assert_eq!(sa["metrics"], sb["metrics"]);
+    let last = |d: &Path| {
+        read_topic(&d.join("run.mcap"), "/fibre/bead_states")
+            .unwrap()
+            .pop()
+            .expect("logged bead states")
+    };
+    assert_eq!(last(a), last(b));
+}
+
+/// The built-in example (SPM fluid and a cohesive-beam fibre with four sub-steps), stopped
+/// between logged steps, as three processes and in one process.
+#[test]
+fn a_resumed_spm_run_ends_in_the_same_bits() {
+    let o = [
+        "output.interval=10",
+        "analysis.metrics=[\"min_end_to_end_over_length\"]",
+    ];
+    for (layout, extra) in [
+        ("processes", &[][..]),
+        ("in-process", &["--in-process"][..]),
+    ] {
+        let (a, b) = straight_and_resumed(
+            &format!("ckpt-spm-{layout}"),
+            &config("spm/tumbling.toml"),
+            &o,
+            60,
+            25,
+            extra,
+        );
+        assert_same_end(&a, &b);
+    }
+}
+
+/// A binary fluid (psi saved with the velocity) and the tilt metric, which reads the
+/// initial bead states kept in the checkpoint.
+#[test]
+fn a_resumed_capillary_run_ends_in_the_same_bits() {
+    let (a, b) = straight_and_resumed(
+        "ckpt-capillary",
+        &config("capillary/tumbling_2d.toml"),
+        &["output.interval=10"],
+        40,
+        17,
+        &["--in-process"],
+    );
+    assert_same_end(&a, &b);
+}
+
+/// A fibre alone: `min_end_to_end_over_length` reads the history from before the checkpoint
+/// (this test fails if the resumed run does not get it back).
+#[test]
+fn a_resumed_fibre_run_keeps_its_history() {
+    let (a, b) = straight_and_resumed(
+        "ckpt-cantilever",
+        &config("cantilever.toml"),
+        &[
+            "output.interval=100",
+            "time.rest_tolerance=1e-300",
+            "analysis.metrics=[\"tip_deflection_over_length\", \"min_end_to_end_over_length\"]",
+        ],
+        600,
+        250,
+        &["--in-process"],
+    );
+    assert_same_end(&a, &b);
+}
+
+/// What a resume refuses, with the reason: another physical scene, a run already as long as
+/// the checkpoint, a folder that holds no checkpoint; and FPD fluids, which cannot be saved.
+#[test]
+fn resume_refuses_what_does_not_fit() {
+    let cfg = config("spm/tumbling.toml");
+    let o = |s: &[&str]| -> Vec<String> { s.iter().map(|x| x.to_string()).collect() };
+    let part = run_scene(
+        "ckpt-refuse-part",
+        &cfg,
+        &o(&["time.steps=10", "analysis.metrics=[]"]),
+        &["--in-process", "--checkpoint-interval", "10"],
+    )
+    .unwrap();
+    let ck = part.join("checkpoint");
+    let ck = ck.to_str().unwrap();
+    let resume = |name: &str, set: &[&str]| {
+        run_scene(name, &cfg, &o(set), &["--in-process", "--resume", ck]).unwrap_err()
+    };
+    let e = resume(
+        "ckpt-refuse-dt",
+        &["time.steps=20", "time.dt=0.5", "analysis.metrics=[]"],
+    );
+    assert!(e.contains("first difference in `time`"), "{e}");
+    let e = resume(
+        "ckpt-refuse-steps",
+        &["time.steps=10", "analysis.metrics=[]"],
+    );
+    assert!(
+        e.contains("checkpoint is at step 10") && e.contains("raise time.steps"),
+        "{e}"
+    );
+    let e = run_scene(
+        "ckpt-refuse-none",
+        &cfg,
+        &o(&["time.steps=20"]),
+        &["--in-process", "--resume", part.to_str().unwrap()],
+    )
+    .unwrap_err();
+    assert!(e.contains("run.json"), "{e}");
+    let e = run_scene(
+        "ckpt-refuse-fpd",
+        &config("fpd/fibre_in_shear.toml"),
+        &o(&["time.steps=10"]),
+        &["--in-process", "--checkpoint-interval", "5"],
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("fpd-lbm") && e.contains("not implemented"),
+        "{e}"
+    );
+}
