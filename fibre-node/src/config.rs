@@ -395,6 +395,17 @@ fn bending_stiffness_from_number(
     Ok(0.5 * k * eta * gamma * lc * lc)
 }
 
+/// A key with two named values: `false` for `values[0]`, `true` for `values[1]`.
+fn switch(p: &str, key: &str, value: &str, values: [&str; 2]) -> Result<bool, String> {
+    match values.iter().position(|v| *v == value) {
+        Some(i) => Ok(i == 1),
+        None => Err(format!(
+            "{p}.{key}: expected {:?} or {:?}, got {value:?}",
+            values[0], values[1]
+        )),
+    }
+}
+
 fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, String> {
     let model = match raw.model.as_str() {
         "cohesive-beam" => ModelKind::CohesiveBeam,
@@ -514,40 +525,28 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         Some(b) => Some(finite(&format!("{p}.bending_number"), b)?),
         None => None,
     };
+    if raw.beam_forces.is_some() && model != ModelKind::CohesiveBeam {
+        return Err(format!(
+            "{p}.beam_forces: only the cohesive-beam model reads this key (model is {:?})",
+            model.name()
+        ));
+    }
     let energy_consistent = match raw.beam_forces.as_deref() {
         None => DEFAULT_ENERGY_CONSISTENT,
-        Some(_) if model != ModelKind::CohesiveBeam => {
-            return Err(format!(
-                "{p}.beam_forces: only the cohesive-beam model reads this key (model is {:?})",
-                model.name()
-            ))
-        }
-        Some("paper") => false,
-        Some("energy-consistent") => true,
-        Some(other) => {
-            return Err(format!(
-                "{p}.beam_forces: expected \"paper\" or \"energy-consistent\", got {other:?}"
-            ))
-        }
+        Some(v) => switch(p, "beam_forces", v, ["paper", "energy-consistent"])?,
     };
-    let profile_inertia = match raw.bead_inertia.as_deref() {
-        None | Some("solid") => false,
-        Some("profile") => true,
-        Some(other) => {
-            return Err(format!(
-                "{p}.bead_inertia: expected \"solid\" or \"profile\", got {other:?}"
-            ))
-        }
-    };
-    let implicit_exchange = match raw.exchange.as_deref() {
-        None | Some("explicit") => false,
-        Some("implicit") => true,
-        Some(other) => {
-            return Err(format!(
-                "{p}.exchange: expected \"explicit\" or \"implicit\", got {other:?}"
-            ))
-        }
-    };
+    let profile_inertia = switch(
+        p,
+        "bead_inertia",
+        raw.bead_inertia.as_deref().unwrap_or("solid"),
+        ["solid", "profile"],
+    )?;
+    let implicit_exchange = switch(
+        p,
+        "exchange",
+        raw.exchange.as_deref().unwrap_or("explicit"),
+        ["explicit", "implicit"],
+    )?;
     Ok(FibreConfig {
         energy_consistent,
         profile_inertia,
