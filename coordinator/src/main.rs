@@ -38,7 +38,7 @@ enum Cmd {
         #[arg(long, value_name = "SECONDS", default_value_t = 600.0)]
         node_timeout: f64,
         /// Save the run's full state to OUT/checkpoint every N steps, at the last step and
-        /// on Ctrl-C (SPM scenes and fibres alone; FPD fluids cannot be saved yet).
+        /// on Ctrl-C.
         #[arg(long, value_name = "N", default_value_t = 0)]
         checkpoint_interval: u64,
         /// Continue the run from a checkpoint folder (OUT/checkpoint of an earlier run),

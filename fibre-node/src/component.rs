@@ -78,6 +78,10 @@ struct SavedState {
     /// kept: nothing is republished then).
     #[serde(default)]
     published: Option<u64>,
+    /// Under FPD, each bead's held displacement (3 per bead, bit patterns; see
+    /// `Fibre::hold_under_fpd`); empty in states saved before it was kept.
+    #[serde(default)]
+    held: Vec<u64>,
     /// Per bead: position (3), orientation (4), velocity (3), angular velocity (3), the
     /// previous step's hydrodynamic impulse (3) and angular impulse (3), and the same 13
     /// kinematic values at the start of the step (the corrector's, see `fibre.rs`), as the
@@ -553,6 +557,13 @@ impl Component for FibreComponent {
             beads_per_fibre: run.fibres.iter().map(|f| f.len()).collect(),
             pending: run.pending,
             published: Some(run.published),
+            held: run
+                .fibres
+                .iter()
+                .flat_map(|f| f.held_displacement.iter())
+                .flat_map(|d| [d.x, d.y, d.z])
+                .map(f64::to_bits)
+                .collect(),
             data,
         };
         serde_json::to_vec(&saved)
@@ -605,6 +616,18 @@ impl Component for FibreComponent {
                 }
             }
             f.compute_forces();
+        }
+        if saved.held.len() == 3 * run.total_beads {
+            let mut held = saved.held.iter().map(|b| f64::from_bits(*b));
+            for f in run.fibres.iter_mut() {
+                for d in f.held_displacement.iter_mut() {
+                    *d = Vec3::new(
+                        held.next().unwrap_or(0.0),
+                        held.next().unwrap_or(0.0),
+                        held.next().unwrap_or(0.0),
+                    );
+                }
+            }
         }
         run.forces_current = true;
         run.pending = saved.pending;

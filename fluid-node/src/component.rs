@@ -610,10 +610,8 @@ impl Component for FluidComponent {
     }
 
     fn save_state(&self) -> Result<Vec<u8>, ComponentError> {
-        if self.fpd.is_some() {
-            return Err(ComponentError::new(
-                "fluid-node: saving the state of an fpd-lbm fluid is not implemented yet",
-            ));
+        if let Some(fpd) = &self.fpd {
+            return fpd.save();
         }
         let run = self
             .run
@@ -648,6 +646,9 @@ impl Component for FluidComponent {
     }
 
     fn restore_state(&mut self, state: &[u8]) -> Result<(), ComponentError> {
+        if let Some(fpd) = self.fpd.as_mut() {
+            return fpd.restore(state);
+        }
         let not_state =
             |why: &str| ComponentError(format!("fluid-node: not a saved fluid state: {why}"));
         let nl = state

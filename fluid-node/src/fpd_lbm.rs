@@ -294,6 +294,9 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
 }
 
 /// A configured FPD fluid: lattice, coupling and exchange buffers.
+/// Format tag of a saved fpd-lbm state ([`FpdRun::save`]).
+const FPD_STATE_FORMAT: &str = "fluid-node fpd-lbm state 1";
+
 pub struct FpdRun {
     pub scene: FpdScene,
     pub lattice: MrtD2q9,
@@ -435,6 +438,63 @@ impl FpdRun {
             derived,
         };
         Ok((run, configured))
+    }
+
+    /// The lattice's state, serialised: a JSON header line, then the populations as
+    /// little-endian f64. The viscosity and force fields are rebuilt from the beads at the
+    /// next step (the sparse viscosity update equals the full one bit for bit), the solid
+    /// layers and the stream's sponge from the scene.
+    pub fn save(&self) -> Result<Vec<u8>, ComponentError> {
+        let (f, time) = self.lattice.saved_state();
+        let header = serde_json::json!({
+            "format": FPD_STATE_FORMAT,
+            "lattice": [self.scene.nx, self.scene.ny],
+            "time": time,
+        });
+        let mut out = header.to_string().into_bytes();
+        out.push(b'\n');
+        out.reserve(f.len() * 8);
+        for v in f {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        Ok(out)
+    }
+
+    /// Bring back a state from [`FpdRun::save`] of the same scene.
+    pub fn restore(&mut self, state: &[u8]) -> Result<(), ComponentError> {
+        let bad =
+            |why: String| ComponentError(format!("fluid-node: not a saved fpd-lbm state: {why}"));
+        let nl = state
+            .iter()
+            .position(|&b| b == b'\n')
+            .ok_or_else(|| bad("no header".into()))?;
+        let h: serde_json::Value =
+            serde_json::from_slice(&state[..nl]).map_err(|e| bad(e.to_string()))?;
+        if h["format"] != FPD_STATE_FORMAT {
+            return Err(bad(format!(
+                "format {}, expected {FPD_STATE_FORMAT:?}",
+                h["format"]
+            )));
+        }
+        let here = serde_json::json!([self.scene.nx, self.scene.ny]);
+        if h["lattice"] != here {
+            return Err(ComponentError(format!(
+                "fluid-node: saved fpd-lbm state is of a {} lattice, the configured scene has {here}",
+                h["lattice"]
+            )));
+        }
+        let time = h["time"]
+            .as_u64()
+            .ok_or_else(|| bad("no step count".into()))?;
+        let body = &state[nl + 1..];
+        if !body.len().is_multiple_of(8) {
+            return Err(bad(format!("{} bytes of populations", body.len())));
+        }
+        let f: Vec<f64> = body
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8])))
+            .collect();
+        self.lattice.set_populations(&f, time).map_err(bad)
     }
 
     /// Phase `fluid-lattice-step` of step `step`.

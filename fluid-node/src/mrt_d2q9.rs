@@ -389,6 +389,29 @@ impl MrtD2q9 {
         self.geo.nx
     }
 
+    /// The populations after the last step (`[y][i][x]`) and the step count: with the
+    /// viscosity and force fields, which the caller rebuilds, the lattice's whole state.
+    pub fn saved_state(&self) -> (&[f64], u64) {
+        (&self.f, self.time)
+    }
+
+    /// Replace the populations and the step count by ones from [`MrtD2q9::saved_state`] of
+    /// a lattice of the same size.
+    pub fn set_populations(&mut self, f: &[f64], time: u64) -> Result<(), String> {
+        if f.len() != self.f.len() {
+            return Err(format!(
+                "{} populations given, the {} x {} lattice has {}",
+                f.len(),
+                self.geo.nx,
+                self.geo.ny,
+                self.f.len()
+            ));
+        }
+        self.f.copy_from_slice(f);
+        self.time = time;
+        Ok(())
+    }
+
     pub fn ny(&self) -> usize {
         self.geo.ny
     }
