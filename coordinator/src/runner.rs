@@ -493,16 +493,16 @@ fn drive(
     let mut trajectory = crate::trajectory::Trajectory::default();
     let dt = scene.scene.time.dt;
     let steps = scene.scene.time.steps;
-    let (first_step, initial) = match &opts.resume {
-        Some(dir) => {
-            let ck = resume(scene, dir, nodes, steps)?;
-            st.time = ck.time;
-            st.steps_done = ck.step;
-            trajectory = ck.trajectory.clone();
-            (ck.step, ck.initial_states())
-        }
-        None => (0, Vec::new()),
+    let resumed = match &opts.resume {
+        Some(dir) => Some(resume(scene, dir, nodes, steps)?),
+        None => None,
     };
+    let first_step = resumed.as_ref().map_or(0, |ck| ck.step);
+    if let Some(ck) = &resumed {
+        st.time = ck.time;
+        st.steps_done = ck.step;
+        trajectory = ck.trajectory.clone();
+    }
     if has_beads {
         exchange
             .read_states(Port::BeadStates, &mut states)
@@ -510,18 +510,19 @@ fn drive(
         log.bead_states(first_step, st.time, &beads, &radii, &states)
             .map_err(fail)?;
     }
-    let initial = if opts.resume.is_some() {
-        initial
-    } else {
-        states.clone()
+    // The metrics compare with step 0, which a resumed run has from its checkpoint.
+    let initial = match &resumed {
+        Some(ck) => ck.initial_states(),
+        None => states.clone(),
     };
-    if track && opts.resume.is_none() {
+    if track && resumed.is_none() {
         trajectory.push(0.0, &states, beads[0]);
     }
 
     let interval = scene.output_interval();
     let load_scale = largest_load(scene);
     let bar = progress_bar(opts.progress, steps);
+    bar.set_position(first_step);
     let mut status = "completed";
     for step in first_step..steps {
         let mut report = Vec::new();
