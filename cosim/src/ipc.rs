@@ -69,25 +69,16 @@ pub const BLOCK_SLICE: Duration = Duration::from_millis(50);
 /// A wait that lasted longer than this is expected to be long again the next step: block at
 /// once rather than poll (see [`Poller::skips_polling`]).
 pub const LONG_WAIT: Duration = Duration::from_micros(400);
-/// Kinds of wait a [`Poller`] remembers separately (see [`wait_kind`]).
-pub const WAIT_KINDS: usize = 9;
+/// Kinds of wait a [`Poller`] remembers separately (see [`wait_kind`]): room for one per
+/// phase and one for everything else; a kind beyond it is never remembered (it polls).
+pub const WAIT_KINDS: usize = 16;
 
 /// The kind of wait that follows `command` (sent by the coordinator, or served by a node):
-/// one per phase, one for everything else. The schedule repeats every step, so the wait
-/// after a given phase lasts about as long as it did one step earlier.
+/// one per phase, 0 for everything else. The schedule repeats every step, so the wait after
+/// a given phase lasts about as long as it did one step earlier.
 pub fn wait_kind(command: &crate::Command) -> usize {
-    use crate::Phase::*;
     match command {
-        crate::Command::RunPhase { phase, .. } => match phase {
-            FluidPhaseField => 1,
-            FibrePositions => 2,
-            FluidMomentumExchange => 3,
-            FibreVelocities => 4,
-            FluidPenalty => 5,
-            FibreForces => 6,
-            FluidLatticeStep => 7,
-            FibreAdvance => 8,
-        },
+        crate::Command::RunPhase { phase, .. } => 1 + *phase as usize,
         _ => 0,
     }
 }
@@ -343,3 +334,27 @@ pub(crate) fn event_service<S: Service>(
 
 /// Initial size of control messages; requests and replies grow by powers of two.
 pub(crate) const CONTROL_INITIAL_BYTES: usize = 4096;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Command, Phase};
+
+    /// A wait that lasted longer than LONG_WAIT makes the next of its kind block at once, a
+    /// short one makes it poll again; kinds are told apart by the phase before them.
+    #[test]
+    fn long_waits_block_at_once_the_next_step() {
+        let after = |phase| wait_kind(&Command::RunPhase { step: 3, phase });
+        let (a, b) = (after(Phase::FibrePositions), after(Phase::FluidPenalty));
+        assert!(a != b && a != wait_kind(&Command::SaveState) && a < WAIT_KINDS);
+        let mut p = Poller::default();
+        assert!(!p.skips_polling(a));
+        p.record(a, LONG_WAIT * 3);
+        p.record(b, LONG_WAIT / 3);
+        assert!(p.skips_polling(a) && !p.skips_polling(b));
+        p.record(a, LONG_WAIT / 2);
+        assert!(!p.skips_polling(a));
+        p.record(WAIT_KINDS, LONG_WAIT * 3);
+        assert!(!p.skips_polling(WAIT_KINDS));
+    }
+}
