@@ -625,24 +625,18 @@ impl Component for FluidComponent {
             pending: run.pending,
             psi_step: run.psi_step,
         };
-        let mut out = serde_json::to_vec(&header)
+        let header = serde_json::to_vec(&header)
             .map_err(|e| ComponentError(format!("fluid-node: cannot serialise the state: {e}")))?;
-        out.push(b'\n');
-        out.reserve(g.dims * g.modes() * 16);
-        for c in 0..g.dims {
-            for v in run.ns.spectrum(c) {
-                out.extend_from_slice(&v.re.to_le_bytes());
-                out.extend_from_slice(&v.im.to_le_bytes());
-            }
-        }
-        // A binary fluid appends its spectral psi (and the same scene restores it).
+        // The velocity spectra, then (a binary fluid) its spectral psi; re and im in turn.
+        let mut spectra: Vec<&[Complex64]> = (0..g.dims).map(|c| run.ns.spectrum(c)).collect();
         if let Some(b) = &run.binary {
-            for v in b.spectrum() {
-                out.extend_from_slice(&v.re.to_le_bytes());
-                out.extend_from_slice(&v.im.to_le_bytes());
-            }
+            spectra.push(b.spectrum());
         }
-        Ok(out)
+        let values: Vec<f64> = spectra
+            .iter()
+            .flat_map(|s| s.iter().flat_map(|v| [v.re, v.im]))
+            .collect();
+        Ok(crate::saved_state::join(&header, values.into_iter()))
     }
 
     fn restore_state(&mut self, state: &[u8]) -> Result<(), ComponentError> {
@@ -651,12 +645,10 @@ impl Component for FluidComponent {
         }
         let not_state =
             |why: &str| ComponentError(format!("fluid-node: not a saved fluid state: {why}"));
-        let nl = state
-            .iter()
-            .position(|&b| b == b'\n')
-            .ok_or_else(|| not_state("no header"))?;
+        let (header, body) =
+            crate::saved_state::split(state).ok_or_else(|| not_state("no header"))?;
         let header: StateHeader =
-            serde_json::from_slice(&state[..nl]).map_err(|e| not_state(&e.to_string()))?;
+            serde_json::from_slice(header).map_err(|e| not_state(&e.to_string()))?;
         if header.format != STATE_FORMAT {
             return Err(ComponentError(format!(
                 "fluid-node: saved state has format {:?}, expected {STATE_FORMAT:?}",
@@ -678,7 +670,6 @@ impl Component for FluidComponent {
                 g.sizes()
             )));
         }
-        let body = &state[nl + 1..];
         let fields = g.dims + usize::from(run.binary.is_some());
         if body.len() != fields * g.modes() * 16 {
             return Err(not_state(&format!(
@@ -688,9 +679,7 @@ impl Component for FluidComponent {
             )));
         }
         let mut spectrum = vec![vec![Complex64::default(); g.modes()]; g.dims];
-        let mut words = body
-            .chunks_exact(8)
-            .map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8])));
+        let mut words = crate::saved_state::values(body);
         for comp in spectrum.iter_mut() {
             for v in comp.iter_mut() {
                 v.re = words.next().unwrap_or(0.0);

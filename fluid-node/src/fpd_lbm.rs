@@ -451,25 +451,20 @@ impl FpdRun {
             "lattice": [self.scene.nx, self.scene.ny],
             "time": time,
         });
-        let mut out = header.to_string().into_bytes();
-        out.push(b'\n');
-        out.reserve(f.len() * 8);
-        for v in f {
-            out.extend_from_slice(&v.to_le_bytes());
-        }
-        Ok(out)
+        Ok(crate::saved_state::join(
+            header.to_string().as_bytes(),
+            f.iter().copied(),
+        ))
     }
 
     /// Bring back a state from [`FpdRun::save`] of the same scene.
     pub fn restore(&mut self, state: &[u8]) -> Result<(), ComponentError> {
         let bad =
             |why: String| ComponentError(format!("fluid-node: not a saved fpd-lbm state: {why}"));
-        let nl = state
-            .iter()
-            .position(|&b| b == b'\n')
-            .ok_or_else(|| bad("no header".into()))?;
+        let (header, body) =
+            crate::saved_state::split(state).ok_or_else(|| bad("no header".into()))?;
         let h: serde_json::Value =
-            serde_json::from_slice(&state[..nl]).map_err(|e| bad(e.to_string()))?;
+            serde_json::from_slice(header).map_err(|e| bad(e.to_string()))?;
         if h["format"] != FPD_STATE_FORMAT {
             return Err(bad(format!(
                 "format {}, expected {FPD_STATE_FORMAT:?}",
@@ -486,14 +481,10 @@ impl FpdRun {
         let time = h["time"]
             .as_u64()
             .ok_or_else(|| bad("no step count".into()))?;
-        let body = &state[nl + 1..];
         if !body.len().is_multiple_of(8) {
             return Err(bad(format!("{} bytes of populations", body.len())));
         }
-        let f: Vec<f64> = body
-            .chunks_exact(8)
-            .map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8])))
-            .collect();
+        let f: Vec<f64> = crate::saved_state::values(body).collect();
         self.lattice.set_populations(&f, time).map_err(bad)
     }
 

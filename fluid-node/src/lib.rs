@@ -26,6 +26,7 @@ pub mod fpd_lbm;
 pub mod grid;
 pub mod mrt_d2q9;
 pub mod parallel;
+pub mod saved_state;
 pub mod smoothed_profile;
 pub mod spectral_ns;
 pub mod spm;
