@@ -8,6 +8,7 @@ pub mod links;
 pub mod mcap_log;
 pub mod metrics;
 pub mod orbit;
+mod pipeline;
 pub mod plot;
 pub mod reference;
 pub mod runner;

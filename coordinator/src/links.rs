@@ -19,6 +19,11 @@ pub trait NodeLink {
     fn name(&self) -> &str;
     /// Send a command and wait for the reply. A `Reply::Error` becomes `LinkFailure::Refused`.
     fn call(&mut self, command: &Command) -> Result<Reply, LinkFailure>;
+    /// Send a command without waiting for its reply (see [`NodeLink::receive_within`]).
+    fn send(&mut self, command: &Command) -> Result<(), LinkFailure>;
+    /// The reply to the command sent last, if it comes within `limit`. A `Reply::Error`
+    /// becomes `LinkFailure::Refused`.
+    fn receive_within(&mut self, limit: std::time::Duration) -> Result<Option<Reply>, LinkFailure>;
     /// End the node (and its process, if any).
     fn shutdown(self: Box<Self>) -> Result<(), LinkFailure>;
 }
@@ -38,6 +43,8 @@ pub struct InProcessLink {
     name: String,
     component: Box<dyn Component>,
     exchange: InProcessExchange,
+    /// The reply to the command sent last (it runs when sent).
+    reply: Option<Reply>,
 }
 
 impl InProcessLink {
@@ -46,6 +53,7 @@ impl InProcessLink {
             name: name.to_string(),
             component,
             exchange,
+            reply: None,
         }
     }
 }
@@ -58,6 +66,21 @@ impl NodeLink for InProcessLink {
         let (reply, _) =
             cosim::dispatch(self.component.as_mut(), &mut self.exchange, command.clone());
         refused(&self.name, reply)
+    }
+    fn send(&mut self, command: &Command) -> Result<(), LinkFailure> {
+        let (reply, _) =
+            cosim::dispatch(self.component.as_mut(), &mut self.exchange, command.clone());
+        self.reply = Some(reply);
+        Ok(())
+    }
+    fn receive_within(&mut self, _: std::time::Duration) -> Result<Option<Reply>, LinkFailure> {
+        match self.reply.take() {
+            Some(r) => refused(&self.name, r).map(Some),
+            None => Err(LinkFailure::Setup(format!(
+                "node `{}`: no command is waiting for a reply",
+                self.name
+            ))),
+        }
     }
     fn shutdown(self: Box<Self>) -> Result<(), LinkFailure> {
         Ok(())
@@ -100,6 +123,22 @@ impl NodeLink for ProcessLink {
             .call(command)
             .inspect_err(|_| self.broken = true)?;
         refused(&self.name, reply)
+    }
+    fn send(&mut self, command: &Command) -> Result<(), LinkFailure> {
+        self.client
+            .send(command)
+            .inspect_err(|_| self.broken = true)
+            .map_err(LinkFailure::from)
+    }
+    fn receive_within(&mut self, limit: std::time::Duration) -> Result<Option<Reply>, LinkFailure> {
+        match self.client.receive_within(limit) {
+            Ok(Some(r)) => refused(&self.name, r).map(Some),
+            Ok(None) => Ok(None),
+            Err(e) => {
+                self.broken = true;
+                Err(e.into())
+            }
+        }
     }
     fn shutdown(self: Box<Self>) -> Result<(), LinkFailure> {
         if !self.broken {

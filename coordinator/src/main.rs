@@ -45,6 +45,11 @@ enum Cmd {
         /// with the same scene; time.steps, [output] and [analysis] may differ.
         #[arg(long, value_name = "DIR")]
         resume: Option<PathBuf>,
+        /// As processes: hand every phase out and back through the coordinator, one at a
+        /// time, instead of sending each node its phases of a step at once (same results;
+        /// slower; for comparison and debugging).
+        #[arg(long)]
+        lock_step: bool,
     },
     /// Check a scene, print its effects, schedule and time-step limits; run nothing.
     Check {
@@ -104,6 +109,7 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             node_timeout,
             checkpoint_interval,
             resume,
+            lock_step,
         } => {
             if !(node_timeout.is_finite() && node_timeout > 0.0) {
                 return Err(format!(
@@ -119,6 +125,7 @@ fn execute(cmd: Cmd) -> Result<(), String> {
                 node_timeout: std::time::Duration::from_secs_f64(node_timeout),
                 checkpoint_interval,
                 resume,
+                lock_step,
             };
             let result = runner::run(&scene, &opts)
                 .map_err(|e| format!("{e}\n(the log written so far is in {})", out.display()))?;

@@ -2,9 +2,13 @@
 //! everything, and write the summary — also when a node fails or the user presses Ctrl-C.
 use crate::links::{self, LinkFailure, NodeLink};
 use crate::mcap_log::RunLog;
+use crate::pipeline;
 use crate::scene::LoadedScene;
 use crate::schedule::{self, Plan};
-use cosim::{BeadState, Command, Configured, InProcessExchange, ModelDescription, Port, Reply};
+use cosim::{
+    BeadState, Command, Configured, InProcessExchange, ModelDescription, Phase, PhaseReport, Port,
+    Reply,
+};
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -33,6 +37,9 @@ pub struct RunOptions {
     pub checkpoint_interval: u64,
     /// Continue from the checkpoint in this folder instead of starting at step 0.
     pub resume: Option<PathBuf>,
+    /// As processes: run one phase at a time through the coordinator instead of pipelined
+    /// batches (see [`pipeline`]).
+    pub lock_step: bool,
 }
 
 impl RunOptions {
@@ -46,6 +53,7 @@ impl RunOptions {
             node_timeout: links::DEFAULT_NODE_TIMEOUT,
             checkpoint_interval: 0,
             resume: None,
+            lock_step: false,
         }
     }
 }
@@ -64,7 +72,7 @@ pub struct RunError {
     pub message: String,
 }
 
-fn fail(message: impl Into<String>) -> RunError {
+pub(crate) fn fail(message: impl Into<String>) -> RunError {
     RunError {
         message: message.into(),
     }
@@ -112,9 +120,9 @@ pub fn check(scene: &LoadedScene) -> Result<(Plan, Configured, Vec<ModelDescript
 }
 
 /// One node of the run: its link and what it said it is.
-struct Node {
-    link: Box<dyn NodeLink>,
-    description: ModelDescription,
+pub(crate) struct Node {
+    pub(crate) link: Box<dyn NodeLink>,
+    pub(crate) description: ModelDescription,
 }
 
 /// Start the nodes the plan needs (fibre before fluid: the fibre node publishes the initial
@@ -524,31 +532,33 @@ fn drive(
     let bar = progress_bar(opts.progress, steps);
     bar.set_position(first_step);
     let mut status = "completed";
+    // Pipelined batches need nodes that can wait for each other's publications (processes)
+    // and a fluid that already holds the bead states of the step: from the second step on.
+    let batches =
+        (!opts.in_process && !opts.lock_step && has_beads && nodes.len() > 1).then(|| {
+            let names: Vec<String> = nodes.iter().map(|n| n.link.name().to_string()).collect();
+            pipeline::Batches::new(&plan.schedule, &owner, &names)
+        });
     for step in first_step..steps {
-        let mut report = Vec::new();
-        for (&phase, &o) in plan.schedule.iter().zip(&owner) {
-            let t0 = Instant::now();
-            let node = &mut nodes[o].link;
-            let reply = node.call(&Command::RunPhase { step, phase }).map_err(|e| {
-                let detail = match &e {
-                    LinkFailure::Refused { message, .. } => message.clone(),
-                    other => other.to_string(),
-                };
-                fail(format!(
-                    "node `{}` failed at step {step}, phase {phase}: {detail}",
-                    node.name()
-                ))
-            })?;
-            *st.seconds_per_phase
-                .entry(phase.name().to_string())
-                .or_default() += t0.elapsed().as_secs_f64();
-            if let Reply::PhaseDone(r) = reply {
-                // One value per name: a later phase's report replaces an earlier one's.
-                for (k, v) in r.diagnostics {
-                    match report.iter_mut().find(|(name, _)| *name == k) {
-                        Some(slot) => slot.1 = v,
-                        None => report.push((k, v)),
-                    }
+        let reports = match &batches {
+            Some(b) if step > first_step => {
+                b.run_step(step, nodes, &mut st.seconds_per_phase, opts.node_timeout)?
+            }
+            _ => run_step_lock_step(
+                step,
+                &plan.schedule,
+                &owner,
+                nodes,
+                &mut st.seconds_per_phase,
+            )?,
+        };
+        let mut report: Vec<(String, f64)> = Vec::new();
+        for r in reports {
+            // One value per name: a later phase's report replaces an earlier one's.
+            for (k, v) in r.diagnostics {
+                match report.iter_mut().find(|(name, _)| *name == k) {
+                    Some(slot) => slot.1 = v,
+                    None => report.push((k, v)),
                 }
             }
         }
@@ -637,6 +647,41 @@ fn drive(
         crate::metrics::compute(&scene.scene.analysis.metrics, &ctx, &mut st.dimensionless)
             .map_err(fail)?;
     Ok(status)
+}
+
+/// One step with one phase at a time: the coordinator hands each phase to its node and waits
+/// for the reply. Returns the phases' reports in schedule order.
+fn run_step_lock_step(
+    step: u64,
+    schedule: &[Phase],
+    owner: &[usize],
+    nodes: &mut [Node],
+    seconds: &mut BTreeMap<String, f64>,
+) -> Result<Vec<PhaseReport>, RunError> {
+    let mut reports = Vec::with_capacity(schedule.len());
+    for (&phase, &o) in schedule.iter().zip(owner) {
+        let t0 = Instant::now();
+        let node = &mut nodes[o].link;
+        let reply = node
+            .call(&Command::RunPhase { step, phase })
+            .map_err(|e| node_failed(node.name(), step, &format!("phase {phase}: "), e))?;
+        *seconds.entry(phase.name().to_string()).or_default() += t0.elapsed().as_secs_f64();
+        if let Reply::PhaseDone(r) = reply {
+            reports.push(r);
+        }
+    }
+    Ok(reports)
+}
+
+/// The error for a node that failed during `step`; `context` names the phase if known.
+pub(crate) fn node_failed(node: &str, step: u64, context: &str, e: LinkFailure) -> RunError {
+    let detail = match &e {
+        LinkFailure::Refused { message, .. } => message.clone(),
+        other => other.to_string(),
+    };
+    fail(format!(
+        "node `{node}` failed at step {step}, {context}{detail}"
+    ))
 }
 
 /// Ask every node for its state and write the checkpoint.

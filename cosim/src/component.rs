@@ -83,6 +83,12 @@ pub fn dispatch(
             ),
             false,
         ),
+        // A batch has to wait for other nodes between its phases, which only a transport
+        // shared between processes can do (`ipc::serve`).
+        Command::RunPhases { .. } => (
+            Reply::Error("a batch of phases (run-phases) is served over iceoryx2 only".into()),
+            false,
+        ),
         Command::SaveState => (as_reply(component.save_state().map(Reply::State)), false),
         Command::RestoreState { state } => (
             as_reply(

@@ -71,7 +71,10 @@ pub const BLOCK_SLICE: Duration = Duration::from_millis(50);
 pub const LONG_WAIT: Duration = Duration::from_micros(400);
 /// Kinds of wait a [`Poller`] remembers separately (see [`wait_kind`]): room for one per
 /// phase and one for everything else; a kind beyond it is never remembered (it polls).
-pub const WAIT_KINDS: usize = 16;
+pub const WAIT_KINDS: usize = 24;
+
+/// Number of [`crate::Phase`] variants (the kinds of wait are numbered after them).
+const PHASES: usize = 8;
 
 /// The kind of wait that follows `command` (sent by the coordinator, or served by a node):
 /// one per phase, 0 for everything else. The schedule repeats every step, so the wait after
@@ -79,8 +82,17 @@ pub const WAIT_KINDS: usize = 16;
 pub fn wait_kind(command: &crate::Command) -> usize {
     match command {
         crate::Command::RunPhase { phase, .. } => 1 + *phase as usize,
+        crate::Command::RunPhases { phases, .. } => {
+            phases.last().map_or(0, |o| 1 + o.phase as usize)
+        }
         _ => 0,
     }
+}
+
+/// The kind of a node's wait for the input of `phase` inside a batch
+/// ([`crate::Command::RunPhases`]), apart from the waits for requests.
+pub fn input_wait_kind(phase: crate::Phase) -> usize {
+    1 + PHASES + phase as usize
 }
 
 /// Poll-then-block state of one waiter (the node waiting for requests, the coordinator for

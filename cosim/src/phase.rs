@@ -1,5 +1,6 @@
 //! Phases of the fractional step. The coordinator tells each node which phase of which step
 //! to run; a node never runs a phase on its own.
+use crate::Port;
 use serde::{Deserialize, Serialize};
 
 /// One phase of one step, named by the node that runs it and what it does.
@@ -34,6 +35,35 @@ impl Phase {
             | Phase::FibreForces
             | Phase::FibreAdvance => "fibre",
             _ => "fluid",
+        }
+    }
+
+    /// What this phase of step `step` reads that the other node publishes within the same
+    /// step: the port and the step the publication carries. Inputs from an earlier step
+    /// (e.g. the bead states a lattice step reads) are not listed: the coordinator starts a
+    /// step only when the one before it has ended.
+    pub fn input(self, step: u64) -> Option<(Port, u64)> {
+        match self {
+            Phase::FluidMomentumExchange | Phase::FluidPenalty => {
+                Some((Port::BeadStates, step + 1))
+            }
+            Phase::FibreVelocities => Some((Port::BeadImpulses, step + 1)),
+            Phase::FluidLatticeStep => Some((Port::BeadForces, step)),
+            Phase::FibreAdvance => Some((Port::BeadVelocities, step + 1)),
+            Phase::FluidPhaseField | Phase::FibrePositions | Phase::FibreForces => None,
+        }
+    }
+
+    /// The port this phase publishes on (when the scene has beads).
+    pub fn output(self) -> Option<Port> {
+        match self {
+            Phase::FibrePositions | Phase::FibreVelocities | Phase::FibreAdvance => {
+                Some(Port::BeadStates)
+            }
+            Phase::FluidMomentumExchange => Some(Port::BeadImpulses),
+            Phase::FibreForces => Some(Port::BeadForces),
+            Phase::FluidLatticeStep => Some(Port::BeadVelocities),
+            Phase::FluidPhaseField | Phase::FluidPenalty => None,
         }
     }
 

@@ -1,6 +1,6 @@
 //! Control messages: the coordinator sends a [`Command`], the node answers one [`Reply`].
 //! Control is small and infrequent next to bulk data, so it travels as JSON.
-use crate::{ModelDescription, Phase};
+use crate::{ModelDescription, Phase, Port};
 use serde::{Deserialize, Serialize};
 
 /// A request from the coordinator to a node.
@@ -14,12 +14,42 @@ pub enum Command {
     Configure { scene_toml: String },
     /// Run one phase of one step.
     RunPhase { step: u64, phase: Phase },
+    /// Run several phases of one step in order, each after its input has arrived from
+    /// another node (pipelined schedule; served over iceoryx2 only). Answered by one
+    /// [`Reply::PhasesDone`], or by the first phase's error.
+    RunPhases { step: u64, phases: Vec<PhaseOrder> },
     /// Answer with the full state, serialised (checkpoint).
     SaveState,
     /// Replace the full state by one saved earlier.
     RestoreState { state: Vec<u8> },
     /// Release resources and end the serving loop.
     Shutdown,
+}
+
+/// One phase of a [`Command::RunPhases`] batch.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PhaseOrder {
+    pub phase: Phase,
+    /// Wait, before running the phase, for this publication of another node.
+    pub awaits: Option<Awaited>,
+    /// After the phase, wake this node (its name): it awaits what the phase published.
+    pub then_wake: Option<String>,
+}
+
+/// A publication a phase waits for: the first on `port` of step `step` or later that this
+/// node has not read yet.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Awaited {
+    pub port: Port,
+    pub step: u64,
+}
+
+/// A phase's report and the seconds it ran inside the node, from the arrival of its input to
+/// its end.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct TimedReport {
+    pub report: PhaseReport,
+    pub seconds: f64,
 }
 
 /// A node's answer to one [`Command`].
@@ -29,6 +59,8 @@ pub enum Reply {
     Description(ModelDescription),
     Configured(Configured),
     PhaseDone(PhaseReport),
+    /// The reports of a [`Command::RunPhases`] batch, one per phase, in order.
+    PhasesDone(Vec<TimedReport>),
     State(Vec<u8>),
     Ok,
     /// The command failed; the message says why, for the user.

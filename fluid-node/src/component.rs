@@ -72,6 +72,8 @@ struct Run {
     /// `Some(n)`: u* of step n computed, penalty pending.
     pending: Option<u64>,
     states: Vec<BeadState>,
+    /// The step of the bead states in `states` (and in the placed profiles).
+    states_step: Option<u64>,
     impulses: Vec<BeadImpulse>,
     /// Plane-averaged u_x per y (Couette diagnostic).
     profile: Vec<f64>,
@@ -166,7 +168,10 @@ impl Run {
                 self.total_beads
             )));
         }
-        self.spm.place(&self.states).map_err(ComponentError)
+        self.states_step = None;
+        self.spm.place(&self.states).map_err(ComponentError)?;
+        self.states_step = Some(h.step);
+        Ok(())
     }
 
     fn report(&mut self, step: u64) -> Result<PhaseReport, ComponentError> {
@@ -473,6 +478,7 @@ impl Component for FluidComponent {
             total_beads,
             pending: None,
             states: Vec::with_capacity(total_beads),
+            states_step: None,
             impulses: vec![BeadImpulse::default(); total_beads],
             binary,
             psi_step: None,
@@ -514,7 +520,10 @@ impl Component for FluidComponent {
                          penalty of step {p} is still pending"
                     )));
                 }
-                if has_beads {
+                // The states of step n are those the penalty of step n - 1 read. Read them
+                // only if not held: in a pipelined run the fibre node may publish those of
+                // step n + 1 meanwhile (coordinator/src/pipeline.rs).
+                if has_beads && run.states_step != Some(step) {
                     run.read_states(step, phase, exchange)?;
                 }
                 let (spm, ns) = (&run.spm, &run.ns);
@@ -697,6 +706,7 @@ impl Component for FluidComponent {
             b.set_spectrum(&psi).map_err(ComponentError)?;
         }
         run.spm.invalidate();
+        run.states_step = None;
         run.pending = header.pending;
         run.psi_step = header.psi_step;
         Ok(())

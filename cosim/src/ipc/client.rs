@@ -2,6 +2,7 @@
 use super::{control_service, create_node, event_service, IpcError, Names, BLOCK_SLICE};
 use crate::{Command, Reply};
 use iceoryx2::node::Node;
+use iceoryx2::pending_response::PendingResponse;
 use iceoryx2::port::client::Client;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
@@ -64,11 +65,22 @@ pub struct NodeClient {
     process: Option<Process>,
     pid: u32,
     client: Client<Svc, [u8], (), [u8], ()>,
+    /// The request sent last, until its reply has been received.
+    pending: Option<Pending>,
     wake: Notifier<Svc>,
     replies: Listener<Svc>,
     control: super::Control<Svc>,
     _events: [Event<Svc>; 2],
     _node: Node<Svc>,
+}
+
+struct Pending {
+    response: PendingResponse<Svc, [u8], (), [u8], ()>,
+    sent: Instant,
+    /// [`super::wait_kind`] of the request.
+    kind: usize,
+    /// Whether a receive has polled for it already (then it only blocks).
+    polled: bool,
 }
 
 struct Process {
@@ -130,6 +142,7 @@ impl NodeClient {
             poller: super::Poller::default(),
             process: None,
             pid: 0,
+            pending: None,
             client: control
                 .client_builder()
                 .initial_max_slice_len(super::CONTROL_INITIAL_BYTES)
@@ -174,10 +187,18 @@ impl NodeClient {
 
     /// Send `command` and wait for the node's reply.
     pub fn call(&mut self, command: &Command) -> Result<Reply, LinkError> {
+        self.send(command)?;
+        self.receive()
+    }
+
+    /// Send `command` without waiting for the reply; [`NodeClient::receive`] or
+    /// [`NodeClient::receive_within`] collects it. A request still unanswered is dropped.
+    pub fn send(&mut self, command: &Command) -> Result<(), LinkError> {
         let lost = |message: String| LinkError::Transport {
             node: self.name.clone(),
             message,
         };
+        self.pending = None;
         let bytes = command.to_bytes();
         // Notifications left from earlier replies would only cause spurious wake-ups.
         let _ = self.replies.try_wait(|_| {});
@@ -195,25 +216,80 @@ impl NodeClient {
         self.wake
             .notify()
             .map_err(|e| lost(format!("cannot wake the node: {e:?}")))?;
+        self.pending = Some(Pending {
+            response: pending,
+            sent: Instant::now(),
+            kind: super::wait_kind(command),
+            polled: false,
+        });
+        Ok(())
+    }
 
-        let start = Instant::now();
-        let kind = super::wait_kind(command);
-        let reply = |bytes: &[u8]| Reply::from_bytes(bytes).map_err(&lost);
-        let receive = || pending.receive().map_err(|e| lost(format!("{e:?}")));
-        if !self.poller.skips_polling(kind) {
-            if let Some(r) = self.poller.poll(receive)? {
-                self.poller.record(kind, start.elapsed());
-                return reply(r.payload());
-            }
-        }
-        self.poller.blocked();
+    /// Wait for the reply to the request sent last, up to the overall timeout
+    /// ([`NodeClient::set_timeout`]).
+    pub fn receive(&mut self) -> Result<Reply, LinkError> {
         loop {
-            let left = self.timeout.saturating_sub(start.elapsed());
-            if left.is_zero() {
+            if let Some(reply) = self.receive_within(BLOCK_SLICE)? {
+                return Ok(reply);
+            }
+            let sent = self.pending.as_ref().map_or_else(Instant::now, |p| p.sent);
+            if sent.elapsed() >= self.timeout {
+                self.pending = None;
                 return Err(LinkError::Timeout {
                     node: self.name.clone(),
                     seconds: self.timeout.as_secs_f64(),
                 });
+            }
+        }
+    }
+
+    /// The reply to the request sent last, if it comes within `limit` (`Ok(None)` if not; the
+    /// request stays pending). Polls first, unless this kind of wait was long last time; a
+    /// zero `limit` only looks whether the reply is there.
+    pub fn receive_within(&mut self, limit: Duration) -> Result<Option<Reply>, LinkError> {
+        let name = self.name.clone();
+        let lost = |message: String| LinkError::Transport {
+            node: name.clone(),
+            message,
+        };
+        let Some(p) = self.pending.as_mut() else {
+            return Err(lost("no request is waiting for a reply".into()));
+        };
+        let start = Instant::now();
+        let done = |p: &mut Pending, poller: &mut super::Poller, bytes: &[u8]| {
+            poller.record(p.kind, p.sent.elapsed());
+            Reply::from_bytes(bytes).map_err(&lost)
+        };
+        if limit.is_zero() {
+            let Some(r) = p.response.receive().map_err(|e| lost(format!("{e:?}")))? else {
+                check_alive(&mut self.process, &self.name)?;
+                return Ok(None);
+            };
+            let reply = done(p, &mut self.poller, r.payload());
+            self.pending = None;
+            return reply.map(Some);
+        }
+        if !p.polled {
+            p.polled = true;
+            if !self.poller.skips_polling(p.kind) {
+                let receive = || p.response.receive().map_err(|e| lost(format!("{e:?}")));
+                if let Some(r) = self.poller.poll(receive)? {
+                    let reply = done(p, &mut self.poller, r.payload());
+                    self.pending = None;
+                    return reply.map(Some);
+                }
+            }
+            self.poller.blocked();
+        }
+        loop {
+            if let Some(r) = p.response.receive().map_err(|e| lost(format!("{e:?}")))? {
+                let reply = done(p, &mut self.poller, r.payload());
+                self.pending = None;
+                return reply.map(Some);
+            }
+            let left = limit.saturating_sub(start.elapsed());
+            if left.is_zero() {
+                return Ok(None);
             }
             // A signal (the user's Ctrl-C, handled by the coordinator) interrupts the wait;
             // that is a spurious wake-up, not a lost link.
@@ -221,17 +297,20 @@ impl NodeClient {
                 Ok(_) | Err(ListenerWaitError::InterruptSignal) => {}
                 Err(e) => return Err(lost(format!("cannot wait for a reply: {e:?}"))),
             }
-            if let Some(r) = pending.receive().map_err(|e| lost(format!("{e:?}")))? {
-                self.poller.record(kind, start.elapsed());
-                return reply(r.payload());
+            if let Some(r) = p.response.receive().map_err(|e| lost(format!("{e:?}")))? {
+                let reply = done(p, &mut self.poller, r.payload());
+                self.pending = None;
+                return reply.map(Some);
             }
             check_alive(&mut self.process, &self.name)?;
-            if !pending.is_connected() {
+            if !p.response.is_connected() {
                 // The reply may have landed just before the server let go of the request.
-                if let Some(r) = pending.receive().map_err(|e| lost(format!("{e:?}")))? {
-                    return reply(r.payload());
-                }
-                return Err(lost("the node stopped serving without answering".into()));
+                let last = p.response.receive().map_err(|e| lost(format!("{e:?}")))?;
+                self.pending = None;
+                return match last {
+                    Some(r) => Reply::from_bytes(r.payload()).map(Some).map_err(&lost),
+                    None => Err(lost("the node stopped serving without answering".into())),
+                };
             }
         }
     }

@@ -27,6 +27,8 @@ struct Lane<T: Record> {
     latest: Option<Sample<Svc, [T], ExchangeHeader>>,
     /// Publications by this participant on this lane.
     sequence: u64,
+    /// Sequence number of the publication this participant read last (0: none).
+    read_sequence: u64,
 }
 
 #[derive(Default)]
@@ -144,6 +146,30 @@ impl IpcExchange {
 
     /// Hand the latest publication of each of this participant's ports to readers that
     /// subscribed since its last publication.
+    /// Whether `port` holds a publication of step `step` or later that this participant has
+    /// not read yet (what a phase of a pipelined batch waits for, see
+    /// [`crate::protocol::Awaited`]). Receives what has arrived; never blocks.
+    pub fn has_fresh(&mut self, port: Port, step: u64) -> Result<bool, ExchangeError> {
+        fn fresh<T: Record>(
+            lane: &mut Option<Lane<T>>,
+            port: Port,
+            step: u64,
+        ) -> Result<bool, ExchangeError> {
+            let Some(lane) = lane.as_mut().filter(|l| l.subscriber.is_some()) else {
+                return Ok(false);
+            };
+            lane.drain(port)?;
+            Ok(lane.latest.as_ref().is_some_and(|s| {
+                let h = s.user_header();
+                h.step >= step && h.sequence > lane.read_sequence
+            }))
+        }
+        let i = port as usize;
+        Ok(fresh(&mut self.lanes.states[i], port, step)?
+            || fresh(&mut self.lanes.impulses[i], port, step)?
+            || fresh(&mut self.lanes.forces[i], port, step)?)
+    }
+
     pub fn update_connections(&self) {
         fn update<T: Record>(lanes: &[Option<Lane<T>>; 4]) {
             for lane in lanes.iter().flatten() {
@@ -184,6 +210,7 @@ impl IpcExchange {
                 subscriber: None,
                 latest: None,
                 sequence: 0,
+                read_sequence: 0,
             });
         }
         Ok(slot.as_mut().expect("just filled"))
@@ -273,7 +300,9 @@ impl IpcExchange {
             .ok_or(ExchangeError::NothingPublished(port.name()))?;
         out.clear();
         out.extend_from_slice(sample.payload());
-        Ok(*sample.user_header())
+        let header = *sample.user_header();
+        lane.read_sequence = header.sequence;
+        Ok(header)
     }
 }
 

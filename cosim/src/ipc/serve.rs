@@ -1,9 +1,10 @@
 //! The node side: answer the coordinator's commands until `Shutdown`.
 use super::{control_service, event_service, IpcError, IpcExchange, Names, BLOCK_SLICE};
-use crate::{Command, Component, Reply};
+use crate::{Awaited, Command, Component, PhaseOrder, Reply, TimedReport};
 use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::node::NodeState;
 use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::server::Server;
 use iceoryx2::prelude::{AllocationStrategy, CallbackProgression, PortFactory};
 use iceoryx2::service::ipc;
@@ -45,20 +46,44 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
     let mut poller = super::Poller::default();
     // The kind of the wait in progress: named by the command served before it.
     let mut kind = 0;
+    // A request that arrived while a batch waited for its input (the batch gave way to it).
+    let mut next: Option<Request> = None;
+    let mut wake_peers = Peers::default();
 
     loop {
         let waiting = std::time::Instant::now();
-        let request = next_request(
-            &server,
-            &listener,
-            &control,
-            &exchange,
-            &mut watch,
-            (&mut poller, kind),
-        )?;
+        let request = match next.take() {
+            Some(r) => r,
+            None => next_request(
+                &server,
+                &listener,
+                &control,
+                &exchange,
+                &mut watch,
+                (&mut poller, kind),
+            )?,
+        };
         poller.record(kind, waiting.elapsed());
         watch.seen_client = true;
         let (reply, done) = match Command::from_bytes(request.payload()) {
+            Ok(Command::RunPhases { step, phases }) => {
+                kind = super::wait_kind(&Command::RunPhases {
+                    step,
+                    phases: phases.last().into_iter().cloned().collect(),
+                });
+                let mut batch = Batch {
+                    server: &server,
+                    listener: &listener,
+                    control: &control,
+                    watch: &mut watch,
+                    poller: &mut poller,
+                    peers: &mut wake_peers,
+                    prefix,
+                };
+                let (reply, interrupted) = batch.run(component, &mut exchange, step, &phases)?;
+                next = interrupted;
+                (reply, false)
+            }
             Ok(command) => {
                 kind = super::wait_kind(&command);
                 crate::dispatch(component, &mut exchange, command)
@@ -88,6 +113,141 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
         }
         if done {
             return Ok(());
+        }
+    }
+}
+
+/// Wake-up notifiers of the other nodes of the run, by name, made on first use.
+#[derive(Default)]
+struct Peers(Vec<(String, Notifier<Svc>)>);
+
+impl Peers {
+    fn wake(
+        &mut self,
+        node: &iceoryx2::node::Node<Svc>,
+        prefix: &str,
+        name: &str,
+    ) -> Result<(), IpcError> {
+        if !self.0.iter().any(|(n, _)| n == name) {
+            let names = Names::new(prefix, name)?;
+            let notifier = event_service(node, &names.wake)?
+                .notifier_builder()
+                .create()
+                .map_err(IpcError::iox(format!(
+                    "create a wake notifier for node {name}"
+                )))?;
+            self.0.push((name.to_string(), notifier));
+        }
+        let (_, notifier) = self.0.iter().find(|(n, _)| n == name).expect("just made");
+        notifier
+            .notify()
+            .map(drop)
+            .map_err(IpcError::iox(format!("wake node {name}")))
+    }
+}
+
+/// What a batch of phases ([`Command::RunPhases`]) needs from the serving loop.
+struct Batch<'a> {
+    server: &'a Server<Svc, [u8], (), [u8], ()>,
+    listener: &'a Listener<Svc>,
+    control: &'a Control,
+    watch: &'a mut Watch,
+    poller: &'a mut super::Poller,
+    peers: &'a mut Peers,
+    prefix: &'a str,
+}
+
+impl Batch<'_> {
+    /// Run the phases in order, each once its input is there; wake the node that waits for
+    /// a phase's output. Returns the reply and, if a new request came while a phase waited
+    /// for its input (the coordinator gave up on this step, e.g. because the other node
+    /// failed), that request: the batch ends there with an error.
+    fn run(
+        &mut self,
+        component: &mut dyn Component,
+        exchange: &mut IpcExchange,
+        step: u64,
+        phases: &[PhaseOrder],
+    ) -> Result<(Reply, Option<Request>), IpcError> {
+        let mut reports = Vec::with_capacity(phases.len());
+        for order in phases {
+            let phase = order.phase;
+            if let Some(awaited) = order.awaits {
+                let kind = super::input_wait_kind(phase);
+                let start = std::time::Instant::now();
+                let interrupted = self.wait_for_input(exchange, awaited, kind)?;
+                self.poller.record(kind, start.elapsed());
+                if let Some(request) = interrupted {
+                    let message = format!(
+                        "phase {phase} of step {step} was still waiting for its input \
+                         ({} of step {}) when a new request came",
+                        awaited.port.name(),
+                        awaited.step
+                    );
+                    return Ok((Reply::Error(message), Some(request)));
+                }
+            }
+            let start = std::time::Instant::now();
+            let (reply, _) =
+                crate::dispatch(component, exchange, Command::RunPhase { step, phase });
+            let report = match reply {
+                Reply::PhaseDone(r) => r,
+                Reply::Error(m) => return Ok((Reply::Error(format!("phase {phase}: {m}")), None)),
+                other => {
+                    let m = format!("phase {phase}: unexpected reply {other:?}");
+                    return Ok((Reply::Error(m), None));
+                }
+            };
+            reports.push(TimedReport {
+                report,
+                seconds: start.elapsed().as_secs_f64(),
+            });
+            if let Some(peer) = &order.then_wake {
+                self.peers.wake(exchange.node(), self.prefix, peer)?;
+            }
+        }
+        Ok((Reply::PhasesDone(reports), None))
+    }
+
+    /// Poll for the awaited publication (unless this kind of wait is long), then block on the
+    /// wake event, which both the producing node and the coordinator notify.
+    fn wait_for_input(
+        &mut self,
+        exchange: &mut IpcExchange,
+        awaited: Awaited,
+        kind: usize,
+    ) -> Result<Option<Request>, IpcError> {
+        let Awaited { port, step } = awaited;
+        let lost = IpcError::iox(format!("read port {}", port.name()));
+        if !self.poller.skips_polling(kind) {
+            let fresh = || exchange.has_fresh(port, step).map(|f| f.then_some(()));
+            if self.poller.poll(fresh).map_err(lost)?.is_some() {
+                return Ok(None);
+            }
+        }
+        self.poller.blocked();
+        loop {
+            if exchange
+                .has_fresh(port, step)
+                .map_err(IpcError::iox(format!("read port {}", port.name())))?
+            {
+                return Ok(None);
+            }
+            if let Some(r) = self
+                .server
+                .receive()
+                .map_err(IpcError::iox("receive a request"))?
+            {
+                return Ok(Some(r));
+            }
+            let woken = match self.listener.timed_wait(|_| {}, BLOCK_SLICE) {
+                Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => 0,
+                other => other.map_err(IpcError::iox("wait for an input"))?,
+            };
+            exchange.update_connections();
+            if woken == 0 {
+                self.watch.check(self.control)?;
+            }
         }
     }
 }

@@ -5,8 +5,9 @@
 //!
 //! Testing hooks: with `FIBRECOSIM_FAULT=exit-at-step:N` in the environment the node writes a
 //! line to stderr and exits with status 3 when asked to run a phase of step N; with
-//! `FIBRECOSIM_FAULT=hang-at-step:N` it stops answering there. They let the coordinator's
-//! handling of a dying or unresponsive node be tested.
+//! `FIBRECOSIM_FAULT=hang-at-step:N` it stops answering there; with
+//! `FIBRECOSIM_FAULT=refuse-at-step:N` its `fibre-velocities` of step N fails with an error.
+//! They let the coordinator's handling of a dying, unresponsive or failing node be tested.
 use cosim::{
     Component, ComponentError, Configured, Exchange, ModelDescription, Phase, PhaseReport,
 };
@@ -17,6 +18,7 @@ use std::process::ExitCode;
 enum Fault {
     Exit,
     Hang,
+    Refuse,
 }
 
 struct FaultAt {
@@ -52,6 +54,11 @@ impl Component for FaultAt {
             Some((Fault::Hang, at)) if *at == step => loop {
                 std::thread::sleep(std::time::Duration::from_secs(3600));
             },
+            Some((Fault::Refuse, at)) if *at == step && phase == Phase::FibreVelocities => {
+                return Err(ComponentError::new(format!(
+                    "fibre-node: injected refusal at step {step}, phase {phase}"
+                )));
+            }
             _ => {}
         }
         self.inner.run_phase(step, phase, ex)
@@ -74,6 +81,7 @@ fn main() -> ExitCode {
         let kind = match kind {
             "exit" => Fault::Exit,
             "hang" => Fault::Hang,
+            "refuse" => Fault::Refuse,
             _ => return None,
         };
         Some((kind, n.parse().ok()?))

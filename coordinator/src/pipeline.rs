@@ -1,0 +1,227 @@
+//! Pipelined steps: each node receives all its phases of a step in one request and runs them
+//! in schedule order, waiting before a phase for the publication of the other node it reads.
+//!
+//! The schedule and its order are the coordinator's, as in a lock-step run; what changes is
+//! who hands over. Lock-step, every phase goes out from the coordinator and its reply comes
+//! back: ten hand-overs between processes in a five-phase SPM step. Pipelined, the node that
+//! publishes an output wakes the node that reads it, and the coordinator hears back once per
+//! node and step: four hand-overs on the step's critical path. Each node runs the same phases
+//! on the same inputs, so the results are the same bits.
+//!
+//! Inputs a phase reads from an earlier step need no wait: a step starts only when every node
+//! has answered the one before it. The one input from an earlier step that a later phase of
+//! the other node overwrites, the bead states `fluid-phase-field` reads, the fluid node holds
+//! already from the penalty of the step before; it reads them only on the first step of a run,
+//! which is therefore run lock-step.
+use crate::links::LinkFailure;
+use crate::runner::{fail, node_failed, Node, RunError};
+use cosim::{Awaited, Command, Phase, PhaseOrder, PhaseReport, Port, Reply};
+use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
+
+/// How long the coordinator blocks on the node that finishes a step before it looks whether
+/// another node has failed meanwhile (then the first would wait for it for ever).
+const CHECK_OTHERS: Duration = Duration::from_millis(50);
+
+/// One phase of a node's batch: the phase, the port whose publication it awaits, the node to
+/// wake after it.
+type Entry = (Phase, Option<Port>, Option<String>);
+
+/// The batches of one schedule: for each node, its phases in order, with what each awaits.
+pub(crate) struct Batches {
+    /// Node index and its phases.
+    per_node: Vec<(usize, Vec<Entry>)>,
+    /// Which node runs each phase of the schedule, in schedule order.
+    owner: Vec<usize>,
+    schedule: Vec<Phase>,
+}
+
+impl Batches {
+    /// `owner[k]`: index of the node that runs `schedule[k]`; `names`: node names by index.
+    pub(crate) fn new(schedule: &[Phase], owner: &[usize], names: &[String]) -> Self {
+        let mut awaits = vec![None; schedule.len()];
+        let mut wakes: Vec<Option<String>> = vec![None; schedule.len()];
+        for (k, phase) in schedule.iter().enumerate() {
+            let Some((port, _)) = phase.input(0) else {
+                continue;
+            };
+            // The input is the latest publication on `port` before this phase in the step.
+            let producer = (0..k).rev().find(|&j| schedule[j].output() == Some(port));
+            if let Some(j) = producer.filter(|&j| owner[j] != owner[k]) {
+                awaits[k] = Some(port);
+                wakes[j] = Some(names[owner[k]].clone());
+            }
+        }
+        let mut per_node: Vec<(usize, Vec<Entry>)> = Vec::new();
+        for (k, &phase) in schedule.iter().enumerate() {
+            let o = owner[k];
+            let entry = (phase, awaits[k], wakes[k].clone());
+            match per_node.iter_mut().find(|(n, _)| *n == o) {
+                Some((_, list)) => list.push(entry),
+                None => per_node.push((o, vec![entry])),
+            }
+        }
+        Self {
+            per_node,
+            owner: owner.to_vec(),
+            schedule: schedule.to_vec(),
+        }
+    }
+
+    /// Run one step: send every node its batch, collect the replies. Returns the phases'
+    /// reports in schedule order and adds each phase's time inside its node to `seconds`.
+    pub(crate) fn run_step(
+        &self,
+        step: u64,
+        nodes: &mut [Node],
+        seconds: &mut BTreeMap<String, f64>,
+        timeout: Duration,
+    ) -> Result<Vec<PhaseReport>, RunError> {
+        for (o, list) in &self.per_node {
+            let phases = list
+                .iter()
+                .map(|(phase, port, wake)| PhaseOrder {
+                    phase: *phase,
+                    awaits: port.map(|port| Awaited {
+                        port,
+                        step: phase.input(step).map_or(step, |(_, s)| s),
+                    }),
+                    then_wake: wake.clone(),
+                })
+                .collect();
+            let link = &mut nodes[*o].link;
+            link.send(&Command::RunPhases { step, phases })
+                .map_err(|e| node_failed(link.name(), step, "", e))?;
+        }
+        // The node of the schedule's last phase answers last; the others are looked at
+        // without blocking while it runs.
+        let last = *self.owner.last().expect("a schedule has phases");
+        let mut replies: Vec<Option<Vec<cosim::TimedReport>>> = vec![None; nodes.len()];
+        let started = Instant::now();
+        loop {
+            for (o, _) in &self.per_node {
+                if replies[*o].is_some() {
+                    continue;
+                }
+                let limit = if *o == last {
+                    CHECK_OTHERS
+                } else {
+                    Duration::ZERO
+                };
+                let link = &mut nodes[*o].link;
+                let reply = link
+                    .receive_within(limit)
+                    .map_err(|e| node_failed(link.name(), step, "", e))?;
+                match reply {
+                    Some(Reply::PhasesDone(r)) => replies[*o] = Some(r),
+                    Some(other) => {
+                        let e = LinkFailure::Setup(format!("unexpected reply {other:?}"));
+                        return Err(node_failed(link.name(), step, "", e));
+                    }
+                    None => {}
+                }
+            }
+            if self.per_node.iter().all(|(o, _)| replies[*o].is_some()) {
+                break;
+            }
+            if started.elapsed() > timeout {
+                let silent: Vec<String> = self
+                    .per_node
+                    .iter()
+                    .filter(|(o, _)| replies[*o].is_none())
+                    .map(|(o, _)| format!("`{}`", nodes[*o].link.name()))
+                    .collect();
+                return Err(fail(format!(
+                    "step {step}: node {} did not answer within {} s (one may be waiting for \
+                     the other)",
+                    silent.join(" and "),
+                    timeout.as_secs_f64()
+                )));
+            }
+        }
+        let mut next = vec![0usize; nodes.len()];
+        let mut reports = Vec::with_capacity(self.schedule.len());
+        for (&phase, &o) in self.schedule.iter().zip(&self.owner) {
+            let r = replies[o]
+                .as_mut()
+                .and_then(|list| list.get_mut(next[o]))
+                .map(std::mem::take)
+                .ok_or_else(|| {
+                    fail(format!(
+                        "node `{}` answered step {step} without a report for phase {phase}",
+                        nodes[o].link.name()
+                    ))
+                })?;
+            next[o] += 1;
+            *seconds.entry(phase.name().to_string()).or_default() += r.seconds;
+            reports.push(r.report);
+        }
+        Ok(reports)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn entry(phase: Phase, port: Option<Port>, wake: Option<&str>) -> Entry {
+        (phase, port, wake.map(String::from))
+    }
+
+    /// Each phase awaits the other node's latest publication of what it reads, and the
+    /// producer wakes it; phases that read nothing new, or only their own node's output,
+    /// wait for nothing.
+    #[test]
+    fn batches_follow_the_data_between_the_nodes() {
+        use Phase::*;
+        let names = ["fibre-node".to_string(), "fluid-node".to_string()];
+        let spm = [
+            FluidPhaseField,
+            FibrePositions,
+            FluidMomentumExchange,
+            FibreVelocities,
+            FluidPenalty,
+        ];
+        let b = Batches::new(&spm, &[1, 0, 1, 0, 1], &names);
+        let fluid = Some("fluid-node");
+        let fibre = Some("fibre-node");
+        assert_eq!(
+            b.per_node,
+            vec![
+                (
+                    1,
+                    vec![
+                        entry(FluidPhaseField, None, None),
+                        entry(FluidMomentumExchange, Some(Port::BeadStates), fibre),
+                        entry(FluidPenalty, Some(Port::BeadStates), None),
+                    ]
+                ),
+                (
+                    0,
+                    vec![
+                        entry(FibrePositions, None, fluid),
+                        entry(FibreVelocities, Some(Port::BeadImpulses), fluid),
+                    ]
+                ),
+            ]
+        );
+        let fpd = [FibreForces, FluidLatticeStep, FibreAdvance];
+        let b = Batches::new(&fpd, &[0, 1, 0], &names);
+        assert_eq!(
+            b.per_node,
+            vec![
+                (
+                    0,
+                    vec![
+                        entry(FibreForces, None, fluid),
+                        entry(FibreAdvance, Some(Port::BeadVelocities), None),
+                    ]
+                ),
+                (
+                    1,
+                    vec![entry(FluidLatticeStep, Some(Port::BeadForces), fibre)]
+                ),
+            ]
+        );
+    }
+}

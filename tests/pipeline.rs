@@ -1,0 +1,120 @@
+//! Pipelined steps (coordinator/src/pipeline.rs): as processes, each node gets its phases of a
+//! step in one request and waits for the other node's publications itself. The results must
+//! be the bits of a lock-step run and of an in-process run, and a node that fails inside a
+//! batch must end the run with its message, not leave the other node waiting.
+mod common;
+use common::*;
+use coordinator::mcap_log::read_topic;
+use std::time::{Duration, Instant};
+
+/// A small binary-fluid scene with a fibre: all five SPM phases, including the phase field
+/// that runs while the fibre node advances the positions.
+fn small_capillary() -> Vec<String> {
+    [
+        "fluid.grid=[48,48]",
+        "fibre.0.beads=4",
+        "fluid.binary.position=24.0",
+        "fibre.0.start=[12.0,10.0,0.0]",
+        "time.dt=2.0",
+        "time.steps=40",
+        "output.interval=5",
+        "analysis.metrics=[]",
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+fn same_run(a: &std::path::Path, b: &std::path::Path, what: &str) {
+    // The initial states and eight outputs; diagnostics from the first output on.
+    for (topic, n) in [("/fibre/bead_states", 9), ("/diagnostics", 8)] {
+        let ta = read_topic(&a.join("run.mcap"), topic).unwrap();
+        let tb = read_topic(&b.join("run.mcap"), topic).unwrap();
+        assert_eq!(ta.len(), n, "{topic}");
+        assert_eq!(ta, tb, "{topic} differs: {what}");
+    }
+}
+
+#[test]
+fn pipelined_lock_step_and_in_process_runs_give_the_same_bits() {
+    let cfg = config("capillary/tumbling_2d.toml");
+    let o = small_capillary();
+    let run = |name: &str, extra: &[&str]| {
+        run_scene(name, &cfg, &o, extra).unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let pipelined = run("pipeline-pipelined", &[]);
+    let lock_step = run("pipeline-lock-step", &["--lock-step"]);
+    let in_process = run("pipeline-in-process", &["--in-process"]);
+    same_run(&pipelined, &lock_step, "pipelined against lock-step");
+    same_run(&pipelined, &in_process, "pipelined against in-process");
+    let states = read_topic(&pipelined.join("run.mcap"), "/fibre/bead_states").unwrap();
+    let x = |i: usize| states[i]["states"][0][0].as_f64().unwrap();
+    assert!((x(8) - x(0)).abs() > 1e-9, "the fibre did not move");
+}
+
+/// The coupled SPM scene of tests/spm.rs, as processes, with a fault injected into the fibre
+/// node at step 5 (a pipelined step: only the first step of a run is lock-step).
+fn faulty_run(name: &str, fault: &str) -> (String, serde_json::Value, Duration) {
+    let out = out_dir(name);
+    let cfg = config("spm/jeffery_rigid.toml");
+    let mut c = run_command(&cfg, &out);
+    for o in [
+        "fluid.grid=[64,64]",
+        "walls.velocity=[-0.28,0.28]",
+        "fibre.0.youngs_modulus=79.58",
+        "time.dt=0.25",
+        "fibre.0.beads=4",
+        "fibre.0.bead_radius=4.0",
+        "fibre.0.start=[32.0,20.0,0.0]",
+        "fibre.0.density=1.5",
+        "time.steps=40",
+        "analysis.metrics=[]",
+    ] {
+        c.args(["--set", o]);
+    }
+    let t0 = Instant::now();
+    let o = c
+        .args(["--node-timeout", "20"])
+        .env("FIBRECOSIM_FAULT", fault)
+        .output()
+        .unwrap();
+    let took = t0.elapsed();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    let summary =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    (err, summary, took)
+}
+
+/// The fibre node refuses its second phase; the fluid node is then waiting for the bead
+/// states that phase would have published. The run ends at once with the fibre's message.
+#[test]
+fn a_phase_that_fails_inside_a_batch_ends_the_run_with_its_message() {
+    let (err, summary, took) = faulty_run("pipeline-refuse", "refuse-at-step:5");
+    eprintln!("{err}\n{took:?}");
+    assert!(!err.contains("panicked"), "{err}");
+    for needle in [
+        "fibre-node",
+        "step 5",
+        "fibre-velocities",
+        "injected refusal",
+    ] {
+        assert!(err.contains(needle), "message lacks `{needle}`: {err}");
+    }
+    assert_eq!(summary["status"], "failed");
+    assert_eq!(summary["steps"], 5);
+    // Well inside the node timeout (20 s): nobody waited for it.
+    assert!(took < Duration::from_secs(15), "took {took:?}");
+}
+
+/// The fibre node dies at the start of its batch; the fluid node waits for its positions.
+#[test]
+fn a_node_that_dies_inside_a_batch_is_reported() {
+    let (err, summary, took) = faulty_run("pipeline-exit", "exit-at-step:5");
+    eprintln!("{err}\n{took:?}");
+    assert!(!err.contains("panicked"), "{err}");
+    for needle in ["fibre-node", "step 5", "injected fault"] {
+        assert!(err.contains(needle), "message lacks `{needle}`: {err}");
+    }
+    assert_eq!(summary["status"], "failed");
+    assert!(took < Duration::from_secs(15), "took {took:?}");
+}
