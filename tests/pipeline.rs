@@ -44,6 +44,13 @@ fn pipelined_lock_step_and_in_process_runs_give_the_same_bits() {
     let pipelined = run("pipeline-pipelined", &[]);
     let lock_step = run("pipeline-lock-step", &["--lock-step"]);
     let in_process = run("pipeline-in-process", &["--in-process"]);
+    let pipelined_flag = |dir: &std::path::Path| {
+        let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()["pipelined"].clone()
+    };
+    assert_eq!(pipelined_flag(&pipelined), true);
+    assert_eq!(pipelined_flag(&lock_step), false);
+    assert_eq!(pipelined_flag(&in_process), false);
     same_run(&pipelined, &lock_step, "pipelined against lock-step");
     same_run(&pipelined, &in_process, "pipelined against in-process");
     let states = read_topic(&pipelined.join("run.mcap"), "/fibre/bead_states").unwrap();

@@ -382,7 +382,11 @@ struct RunState {
     effects: Vec<String>,
     steps_done: u64,
     time: f64,
+    /// Seconds per phase: as the coordinator saw them (lock-step), or inside the nodes from
+    /// the arrival of a phase's input to its end (pipelined).
     seconds_per_phase: BTreeMap<String, f64>,
+    /// Whether the steps after the first were pipelined (see `pipeline.rs`).
+    pipelined: bool,
     last_diagnostics: Vec<(String, f64)>,
     metrics: BTreeMap<String, crate::metrics::Metric>,
     dimensionless: BTreeMap<String, f64>,
@@ -423,6 +427,7 @@ impl RunState {
             "effects": self.effects,
             "schedule": plan.schedule.iter().map(|p| p.name()).collect::<Vec<_>>(),
             "process_layout": if opts.in_process { "in-process" } else { "processes" },
+            "pipelined": self.pipelined,
             "steps": self.steps_done,
             "steps_requested": scene.scene.time.steps,
             "dt": scene.scene.time.dt,
@@ -539,6 +544,7 @@ fn drive(
             let names: Vec<String> = nodes.iter().map(|n| n.link.name().to_string()).collect();
             pipeline::Batches::new(&plan.schedule, &owner, &names)
         });
+    st.pipelined = batches.is_some();
     for step in first_step..steps {
         let reports = match &batches {
             Some(b) if step > first_step => {
