@@ -177,11 +177,58 @@ fn contact_angle_64_deg_within_3_deg() {
     assert!((c.angle - c.reference).abs() < 3.0);
 }
 
-/// The low end of the issue's range, ψ0 = 0.55 (reference 40.2°): with r_b = 8, ξ = 2 the
+/// The low end of the issue's range, ψ0 = 0.55 (Young's angle 40.20°), in the issue's own
+/// scene (`contact_angle.toml`: r_b = 20, ξ = 3, ξ_c = 15, 128², η = 10) at dt = 1 instead of
+/// 0.5 to halve the steps. Measured: θ_A = 41.60 / 40.58 / 40.31° at steps 45 000 / 60 000 /
+/// 75 000, settling at about 40.2°. The equilibrium depends on dt (capillary.md, "Contact
+/// angle at the issue's resolution": 38.66° at the scene's dt = 0.5 after 400 000 steps,
+/// about 41.6° at dt = 2), by less than the issue's 3°. Tolerance: the issue's 3°, and the
+/// bead settled (under 0.5° in the last 15 000 steps).
+#[test]
+fn contact_angle_40_deg_within_3_deg_at_the_scene_resolution() {
+    let set: Vec<String> = [
+        "fibre.0.affinity=0.55",
+        "time.dt=1.0",
+        "time.steps=75000",
+        "output.interval=15000",
+    ]
+    .map(String::from)
+    .to_vec();
+    let test = "capillary-angle-40-scene";
+    let s = run_in_process(&config("capillary/contact_angle.toml"), &set, test);
+    assert_eq!(s["status"], "completed", "{s}");
+    let m = &s["metrics"]["contact_angle_deg"];
+    let (angle, reference) = (
+        m["value"].as_f64().unwrap(),
+        m["reference"].as_f64().unwrap(),
+    );
+    let dir = root()
+        .join("target")
+        .join("test-runs")
+        .join(format!("{test}-{}", std::process::id()));
+    let log = read_topic(&dir.join("run.mcap"), "/diagnostics").unwrap();
+    let at = |i: usize| log[i]["contact_angle_deg"].as_f64().unwrap();
+    let (before, last) = (at(log.len() - 2), at(log.len() - 1));
+    println!(
+        "theta_A = {angle:.3} deg (reference {reference:.3}), {before:.3} 15000 steps earlier"
+    );
+    assert!((reference - 40.2).abs() < 0.1, "{reference}");
+    assert!((last - angle).abs() < 1e-9);
+    assert!(
+        (angle - reference).abs() < 3.0,
+        "{angle} against {reference}"
+    );
+    assert!(
+        (before - last).abs() < 0.5,
+        "not settled: {before} -> {last}"
+    );
+}
+
+/// The same angle with r_b = 8, ξ = 2 (r_b / ξ = 4, the small grid of the tests above): the
 /// bead overshoots Young's height, 34.5° after 12000 steps and still falling.
 #[test]
-#[ignore = "fails: r_b / xi = 4 overshoots Young's angle at 40 deg (34.5 deg after 12000 steps); docs/validation/capillary.md"]
-fn contact_angle_40_deg_within_3_deg() {
+#[ignore = "fails: r_b / xi = 4 overshoots Young's angle at 40 deg (34.5 deg after 12000 steps; the scene's r_b / xi = 6.7 passes, test above); docs/validation/capillary.md"]
+fn contact_angle_40_deg_within_3_deg_at_r_b_over_xi_4() {
     let c = contact_angle_run(0.55, 12000, "capillary-angle-40");
     println!(
         "psi0 = 0.55: theta_A = {:.3} deg, reference {:.3}, h = {:.3}",
