@@ -34,6 +34,8 @@ pub(crate) struct Batches {
     /// Which node runs each phase of the schedule, in schedule order.
     owner: Vec<usize>,
     schedule: Vec<Phase>,
+    /// The step whose batch went out early to the nodes that start it alone.
+    sent_early: Option<u64>,
 }
 
 impl Batches {
@@ -65,33 +67,81 @@ impl Batches {
             per_node,
             owner: owner.to_vec(),
             schedule: schedule.to_vec(),
+            sent_early: None,
         }
     }
 
-    /// Run one step: send every node its batch, collect the replies. Returns the phases'
-    /// reports in schedule order and adds each phase's time inside its node to `seconds`.
+    /// The batch of node `o` for `step`.
+    fn batch(&self, o: usize, step: u64) -> Command {
+        let list = &self
+            .per_node
+            .iter()
+            .find(|(n, _)| *n == o)
+            .expect("a node of the plan")
+            .1;
+        let phases = list
+            .iter()
+            .map(|(phase, port, wake)| PhaseOrder {
+                phase: *phase,
+                awaits: port.map(|port| Awaited {
+                    port,
+                    step: phase.input(step).map_or(step, |(_, s)| s),
+                }),
+                then_wake: wake.clone(),
+            })
+            .collect();
+        Command::RunPhases { step, phases }
+    }
+
+    /// Nodes whose batch may go out a step early: its first phase neither reads nor publishes
+    /// anything of another node (`fluid-phase-field`), so it can start as soon as the node has
+    /// finished the step before, while the coordinator is still busy with that step.
+    fn starts_alone(&self, o: usize) -> bool {
+        let list = &self
+            .per_node
+            .iter()
+            .find(|(n, _)| *n == o)
+            .expect("a node of the plan")
+            .1;
+        list.first()
+            .is_some_and(|(phase, _, _)| phase.input(0).is_none() && phase.output().is_none())
+    }
+
+    /// Whether the batch of `step` went out early to some node.
+    pub(crate) fn sent_early(&self, step: u64) -> bool {
+        self.sent_early == Some(step)
+    }
+
+    /// Run one step: send every node its batch (unless it went out with the step before),
+    /// collect the replies. With `send_next`, the nodes that can start the next step alone get
+    /// its batch now too; the caller must then run that step. Returns the phases' reports in
+    /// schedule order and adds each phase's time inside its node to `seconds`.
     pub(crate) fn run_step(
-        &self,
+        &mut self,
         step: u64,
+        send_next: bool,
         nodes: &mut [Node],
         seconds: &mut BTreeMap<String, f64>,
         timeout: Duration,
     ) -> Result<Vec<PhaseReport>, RunError> {
-        for (o, list) in &self.per_node {
-            let phases = list
-                .iter()
-                .map(|(phase, port, wake)| PhaseOrder {
-                    phase: *phase,
-                    awaits: port.map(|port| Awaited {
-                        port,
-                        step: phase.input(step).map_or(step, |(_, s)| s),
-                    }),
-                    then_wake: wake.clone(),
-                })
-                .collect();
+        let sent_early = self.sent_early.take() == Some(step);
+        for (o, _) in &self.per_node {
+            if sent_early && self.starts_alone(*o) {
+                continue;
+            }
             let link = &mut nodes[*o].link;
-            link.send(&Command::RunPhases { step, phases })
+            link.send(&self.batch(*o, step))
                 .map_err(|e| node_failed(link.name(), step, "", e))?;
+        }
+        if send_next {
+            for (o, _) in &self.per_node {
+                if self.starts_alone(*o) {
+                    let link = &mut nodes[*o].link;
+                    link.send(&self.batch(*o, step + 1))
+                        .map_err(|e| node_failed(link.name(), step + 1, "", e))?;
+                    self.sent_early = Some(step + 1);
+                }
+            }
         }
         // The node of the schedule's last phase answers last; the others are looked at
         // without blocking while it runs.

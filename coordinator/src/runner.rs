@@ -539,16 +539,34 @@ fn drive(
     let mut status = "completed";
     // Pipelined batches need nodes that can wait for each other's publications (processes)
     // and a fluid that already holds the bead states of the step: from the second step on.
-    let batches =
+    let mut batches =
         (!opts.in_process && !opts.lock_step && has_beads && nodes.len() > 1).then(|| {
             let names: Vec<String> = nodes.iter().map(|n| n.link.name().to_string()).collect();
             pipeline::Batches::new(&plan.schedule, &owner, &names)
         });
     st.pipelined = batches.is_some();
+    let every = opts.checkpoint_interval;
+    let rests = scene.scene.time.rest_tolerance.is_some();
     for step in first_step..steps {
-        let reports = match &batches {
+        // A batch may go out a step early (pipeline.rs) only if nothing can end the run or
+        // save it between the two steps: not before the last step, a checkpoint, a possible
+        // stop at rest, or after Ctrl-C.
+        let send_next = step + 1 < steps
+            && !rests
+            && !(every > 0 && (step + 1) % every == 0)
+            && !INTERRUPTED.load(Ordering::SeqCst);
+        let mut next_sent = false;
+        let reports = match &mut batches {
             Some(b) if step > first_step => {
-                b.run_step(step, nodes, &mut st.seconds_per_phase, opts.node_timeout)?
+                let reports = b.run_step(
+                    step,
+                    send_next,
+                    nodes,
+                    &mut st.seconds_per_phase,
+                    opts.node_timeout,
+                )?;
+                next_sent = b.sent_early(step + 1);
+                reports
             }
             _ => run_step_lock_step(
                 step,
@@ -584,7 +602,8 @@ fn drive(
             .time
             .rest_tolerance
             .is_some_and(|tol| is_at_rest(&st.last_diagnostics, tol, load_scale));
-        let stop = INTERRUPTED.load(Ordering::SeqCst);
+        // With the next step's batch out, Ctrl-C ends the run after that step.
+        let stop = INTERRUPTED.load(Ordering::SeqCst) && !next_sent;
         if track {
             exchange
                 .read_states(Port::BeadStates, &mut states)
@@ -606,7 +625,6 @@ fn drive(
             log.flush().map_err(fail)?;
         }
         bar.inc(1);
-        let every = opts.checkpoint_interval;
         if every > 0 && ((step + 1) % every == 0 || step + 1 == steps || stop) {
             let run = crate::checkpoint::RunCheckpoint::new(
                 step + 1,

@@ -65,8 +65,8 @@ pub struct NodeClient {
     process: Option<Process>,
     pid: u32,
     client: Client<Svc, [u8], (), [u8], ()>,
-    /// The request sent last, until its reply has been received.
-    pending: Option<Pending>,
+    /// Requests sent and not yet answered, oldest first (replies come in this order).
+    pending: VecDeque<Pending>,
     wake: Notifier<Svc>,
     replies: Listener<Svc>,
     control: super::Control<Svc>,
@@ -142,7 +142,7 @@ impl NodeClient {
             poller: super::Poller::default(),
             process: None,
             pid: 0,
-            pending: None,
+            pending: VecDeque::new(),
             client: control
                 .client_builder()
                 .initial_max_slice_len(super::CONTROL_INITIAL_BYTES)
@@ -185,20 +185,21 @@ impl NodeClient {
         self.timeout = timeout;
     }
 
-    /// Send `command` and wait for the node's reply.
+    /// Send `command` and wait for the node's reply. Requests still unanswered are dropped
+    /// first (their replies are not waited for).
     pub fn call(&mut self, command: &Command) -> Result<Reply, LinkError> {
+        self.pending.clear();
         self.send(command)?;
         self.receive()
     }
 
     /// Send `command` without waiting for the reply; [`NodeClient::receive`] or
-    /// [`NodeClient::receive_within`] collects it. A request still unanswered is dropped.
+    /// [`NodeClient::receive_within`] collects the replies in the order the requests went.
     pub fn send(&mut self, command: &Command) -> Result<(), LinkError> {
         let lost = |message: String| LinkError::Transport {
             node: self.name.clone(),
             message,
         };
-        self.pending = None;
         let bytes = command.to_bytes();
         // Notifications left from earlier replies would only cause spurious wake-ups.
         let _ = self.replies.try_wait(|_| {});
@@ -216,7 +217,7 @@ impl NodeClient {
         self.wake
             .notify()
             .map_err(|e| lost(format!("cannot wake the node: {e:?}")))?;
-        self.pending = Some(Pending {
+        self.pending.push_back(Pending {
             response: pending,
             sent: Instant::now(),
             kind: super::wait_kind(command),
@@ -232,9 +233,9 @@ impl NodeClient {
             if let Some(reply) = self.receive_within(BLOCK_SLICE)? {
                 return Ok(reply);
             }
-            let sent = self.pending.as_ref().map_or_else(Instant::now, |p| p.sent);
+            let sent = self.pending.front().map_or_else(Instant::now, |p| p.sent);
             if sent.elapsed() >= self.timeout {
-                self.pending = None;
+                self.pending.pop_front();
                 return Err(LinkError::Timeout {
                     node: self.name.clone(),
                     seconds: self.timeout.as_secs_f64(),
@@ -243,8 +244,8 @@ impl NodeClient {
         }
     }
 
-    /// The reply to the request sent last, if it comes within `limit` (`Ok(None)` if not; the
-    /// request stays pending). Polls first, unless this kind of wait was long last time; a
+    /// The reply to the oldest request not yet answered, if it comes within `limit` (`Ok(None)`
+    /// if not; the request stays pending). Polls first, unless this kind of wait was long last time; a
     /// zero `limit` only looks whether the reply is there.
     pub fn receive_within(&mut self, limit: Duration) -> Result<Option<Reply>, LinkError> {
         let name = self.name.clone();
@@ -252,7 +253,7 @@ impl NodeClient {
             node: name.clone(),
             message,
         };
-        let Some(p) = self.pending.as_mut() else {
+        let Some(p) = self.pending.front_mut() else {
             return Err(lost("no request is waiting for a reply".into()));
         };
         let start = Instant::now();
@@ -266,7 +267,7 @@ impl NodeClient {
                 return Ok(None);
             };
             let reply = done(p, &mut self.poller, r.payload());
-            self.pending = None;
+            self.pending.pop_front();
             return reply.map(Some);
         }
         if !p.polled {
@@ -275,7 +276,7 @@ impl NodeClient {
                 let receive = || p.response.receive().map_err(|e| lost(format!("{e:?}")));
                 if let Some(r) = self.poller.poll(receive)? {
                     let reply = done(p, &mut self.poller, r.payload());
-                    self.pending = None;
+                    self.pending.pop_front();
                     return reply.map(Some);
                 }
             }
@@ -284,7 +285,7 @@ impl NodeClient {
         loop {
             if let Some(r) = p.response.receive().map_err(|e| lost(format!("{e:?}")))? {
                 let reply = done(p, &mut self.poller, r.payload());
-                self.pending = None;
+                self.pending.pop_front();
                 return reply.map(Some);
             }
             let left = limit.saturating_sub(start.elapsed());
@@ -299,14 +300,14 @@ impl NodeClient {
             }
             if let Some(r) = p.response.receive().map_err(|e| lost(format!("{e:?}")))? {
                 let reply = done(p, &mut self.poller, r.payload());
-                self.pending = None;
+                self.pending.pop_front();
                 return reply.map(Some);
             }
             check_alive(&mut self.process, &self.name)?;
             if !p.response.is_connected() {
                 // The reply may have landed just before the server let go of the request.
                 let last = p.response.receive().map_err(|e| lost(format!("{e:?}")))?;
-                self.pending = None;
+                self.pending.pop_front();
                 return match last {
                     Some(r) => Reply::from_bytes(r.payload()).map(Some).map_err(&lost),
                     None => Err(lost("the node stopped serving without answering".into())),

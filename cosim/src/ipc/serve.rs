@@ -8,6 +8,7 @@ use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::server::Server;
 use iceoryx2::prelude::{AllocationStrategy, CallbackProgression, PortFactory};
 use iceoryx2::service::ipc;
+use std::collections::VecDeque;
 
 type Svc = ipc::Service;
 type Control = super::Control<Svc>;
@@ -46,13 +47,14 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
     let mut poller = super::Poller::default();
     // The kind of the wait in progress: named by the command served before it.
     let mut kind = 0;
-    // A request that arrived while a batch waited for its input (the batch gave way to it).
-    let mut next: Option<Request> = None;
+    // Requests received but not served yet, in order: batches that came while a batch waited
+    // for its input, or the request a waiting batch gave way to.
+    let mut queue: VecDeque<Request> = VecDeque::new();
     let mut wake_peers = Peers::default();
 
     loop {
         let waiting = std::time::Instant::now();
-        let request = match next.take() {
+        let request = match queue.pop_front() {
             Some(r) => r,
             None => next_request(
                 &server,
@@ -78,10 +80,25 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
                     watch: &mut watch,
                     poller: &mut poller,
                     peers: &mut wake_peers,
+                    queue: &mut queue,
                     prefix,
                 };
                 let (reply, interrupted) = batch.run(component, &mut exchange, step, &phases)?;
-                next = interrupted;
+                if let Some(other) = interrupted {
+                    // The coordinator gave up on the step: the batches queued behind this one
+                    // wait for the same node and are answered with an error, unserved.
+                    for queued in queue.drain(..) {
+                        let message = "abandoned: an earlier batch gave way to a new request";
+                        answer(
+                            queued,
+                            &Reply::Error(message.into()),
+                            &replied,
+                            &mut watch,
+                            &control,
+                        )?;
+                    }
+                    queue.push_back(other);
+                }
                 (reply, false)
             }
             Ok(command) => {
@@ -90,31 +107,43 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
             }
             Err(message) => (Reply::Error(message), false),
         };
-        let bytes = reply.to_bytes();
-        let sent = request
-            .loan_slice_uninit(bytes.len())
-            .map_err(IpcError::iox("loan memory for a reply"))
-            .and_then(|r| {
-                r.write_from_slice(&bytes)
-                    .send()
-                    .map_err(IpcError::iox("send a reply"))
-            });
-        drop(request);
-        let sent = sent.and_then(|()| {
-            replied
-                .notify()
-                .map(drop)
-                .map_err(IpcError::iox("notify the coordinator"))
-        });
-        if let Err(e) = sent {
-            // Most likely the coordinator went away meanwhile; say so if it did.
-            watch.check(&control)?;
-            return Err(e);
-        }
+        answer(request, &reply, &replied, &mut watch, &control)?;
         if done {
             return Ok(());
         }
     }
+}
+
+/// Send `reply` to `request` and notify the coordinator.
+fn answer(
+    request: Request,
+    reply: &Reply,
+    replied: &Notifier<Svc>,
+    watch: &mut Watch,
+    control: &Control,
+) -> Result<(), IpcError> {
+    let bytes = reply.to_bytes();
+    let sent = request
+        .loan_slice_uninit(bytes.len())
+        .map_err(IpcError::iox("loan memory for a reply"))
+        .and_then(|r| {
+            r.write_from_slice(&bytes)
+                .send()
+                .map_err(IpcError::iox("send a reply"))
+        });
+    drop(request);
+    let sent = sent.and_then(|()| {
+        replied
+            .notify()
+            .map(drop)
+            .map_err(IpcError::iox("notify the coordinator"))
+    });
+    if let Err(e) = sent {
+        // Most likely the coordinator went away meanwhile; say so if it did.
+        watch.check(control)?;
+        return Err(e);
+    }
+    Ok(())
 }
 
 /// Wake-up notifiers of the other nodes of the run, by name, made on first use.
@@ -154,6 +183,8 @@ struct Batch<'a> {
     watch: &'a mut Watch,
     poller: &'a mut super::Poller,
     peers: &'a mut Peers,
+    /// Where batches that arrive during a wait are kept for later.
+    queue: &'a mut VecDeque<Request>,
     prefix: &'a str,
 }
 
@@ -238,6 +269,15 @@ impl Batch<'_> {
                 .receive()
                 .map_err(IpcError::iox("receive a request"))?
             {
+                // The next step's batch, sent early: it waits its turn. Anything else
+                // (shutdown, a state request) means the coordinator gave up on this step.
+                if matches!(
+                    Command::from_bytes(r.payload()),
+                    Ok(Command::RunPhases { .. })
+                ) {
+                    self.queue.push_back(r);
+                    continue;
+                }
                 return Ok(Some(r));
             }
             let woken = match self.listener.timed_wait(|_| {}, BLOCK_SLICE) {
