@@ -553,7 +553,7 @@ fn drive(
         // stop at rest, or after Ctrl-C.
         let send_next = step + 1 < steps
             && !rests
-            && !(every > 0 && (step + 1) % every == 0)
+            && (every == 0 || (step + 1) % every != 0)
             && !INTERRUPTED.load(Ordering::SeqCst);
         let mut next_sent = false;
         let reports = match &mut batches {
