@@ -209,6 +209,7 @@ impl Component for FibreComponent {
                 param("fibre.N.start", len, Some("[0.0, 0.0, 0.0]"), "position of bead 0"),
                 param("fibre.N.direction", "1", Some("[1.0, 0.0, 0.0]"), "direction of the straight initial fibre (normalised; z = 0 in 2D)"),
                 param("fibre.N.spacing", len, Some("2 bead_radius"), "initial and rest distance between neighbouring beads"),
+                param("fibre.N.initial_bend", len, Some("0.0"), "amplitude of an S-shaped initial offset across direction (one sine wave along the fibre): seeds buckling; the fibre is at rest but not stress-free"),
                 param("fibre.N.clamp", "1", Some("[]"), "indices of clamped beads (negative counts from the end): fixed position and orientation; under fpd-lbm held in place by a proportional-integral force (its steady value is minus the drag)"),
                 param("fibre.N.loads", "1", Some("[]"), "constant point loads: tables { bead, force, torque }"),
                 param("fibre.N.loads.M.bead", "1", None, "bead index (negative counts from the end)"),

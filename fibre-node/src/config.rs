@@ -52,6 +52,9 @@ pub struct FibreConfig {
     /// Unit vector.
     pub direction: [f64; 3],
     pub spacing: f64,
+    /// Amplitude (length) of an S-shaped initial offset of the beads across `direction`
+    /// (0: straight).
+    pub initial_bend: f64,
     /// Resolved, sorted, without duplicates.
     pub clamp: Vec<usize>,
     pub loads: Vec<LoadConfig>,
@@ -140,6 +143,7 @@ struct RawFibre {
     start: Option<[f64; 3]>,
     direction: Option<[f64; 3]>,
     spacing: Option<f64>,
+    initial_bend: Option<f64>,
     #[serde(default)]
     clamp: Vec<i64>,
     #[serde(default)]
@@ -457,6 +461,10 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         Some(s) => positive(&format!("{p}.spacing"), s)?,
         None => 2.0 * bead_radius,
     };
+    let initial_bend = match raw.initial_bend {
+        Some(a) => finite(&format!("{p}.initial_bend"), a)?,
+        None => 0.0,
+    };
     let mut clamp = Vec::with_capacity(raw.clamp.len());
     for &c in &raw.clamp {
         clamp.push(bead_index(&format!("{p}.clamp"), c, beads)?);
@@ -560,6 +568,7 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         start,
         direction,
         spacing,
+        initial_bend,
         clamp,
         loads,
         damping,

@@ -185,6 +185,24 @@ pub fn bead_mass_inertia(density: f64, r: f64, planar: bool) -> (f64, f64) {
     }
 }
 
+/// The initial offset of bead `k` across the fibre: `fibre.N.initial_bend` times one full sine
+/// wave along the fibre (an S, zero at both ends and the middle), in the x-y plane and
+/// perpendicular to `dir` (along y if `dir` is along z). Seeds the buckling instability, which
+/// a straight fibre in a symmetric flow only meets through round-off.
+fn bend_offset(cfg: &FibreConfig, dir: &Vec3, k: usize) -> Vec3 {
+    if cfg.initial_bend == 0.0 || cfg.beads < 3 {
+        return Vec3::zeros();
+    }
+    let across = Vec3::new(-dir.y, dir.x, 0.0);
+    let across = if across.norm() > 1e-12 {
+        across.normalize()
+    } else {
+        Vec3::new(0.0, 1.0, 0.0)
+    };
+    let s = k as f64 / (cfg.beads - 1) as f64;
+    across * (cfg.initial_bend * (2.0 * std::f64::consts::PI * s).sin())
+}
+
 impl Fibre {
     /// A straight fibre at rest as the scene describes it. `with_fluid`: hydrodynamic
     /// impulses will act (turns on free bead rotation for the bead-spring model).
@@ -252,7 +270,7 @@ impl Fibre {
             clamped,
             loads,
             pos: (0..n)
-                .map(|k| start + dir * (cfg.spacing * k as f64))
+                .map(|k| start + dir * (cfg.spacing * k as f64) + bend_offset(cfg, &dir, k))
                 .collect(),
             quat: vec![q0; n],
             vel: vec![Vec3::zeros(); n],
