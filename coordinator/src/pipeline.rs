@@ -115,13 +115,14 @@ impl Batches {
     /// Run one step: send every node its batch (unless it went out with the step before),
     /// collect the replies. With `send_next`, the nodes that can start the next step alone get
     /// its batch now too; the caller must then run that step. Returns the phases' reports in
-    /// schedule order and adds each phase's time inside its node to `seconds`.
+    /// schedule order, adds each phase's time inside its node to `seconds` and the time it
+    /// waited there for its input to `waiting`.
     pub(crate) fn run_step(
         &mut self,
         step: u64,
         send_next: bool,
         nodes: &mut [Node],
-        seconds: &mut BTreeMap<String, f64>,
+        (seconds, waiting): (&mut BTreeMap<String, f64>, &mut BTreeMap<String, f64>),
         timeout: Duration,
     ) -> Result<Vec<PhaseReport>, RunError> {
         let sent_early = self.sent_early.take() == Some(step);
@@ -204,6 +205,7 @@ impl Batches {
                 })?;
             next[o] += 1;
             *seconds.entry(phase.name().to_string()).or_default() += r.seconds;
+            *waiting.entry(phase.name().to_string()).or_default() += r.waited;
             reports.push(r.report);
         }
         Ok(reports)

@@ -387,6 +387,8 @@ struct RunState {
     seconds_per_phase: BTreeMap<String, f64>,
     /// Whether the steps after the first were pipelined (see `pipeline.rs`).
     pipelined: bool,
+    /// Pipelined runs: seconds each phase waited inside its node for the other node's input.
+    seconds_waiting: BTreeMap<String, f64>,
     last_diagnostics: Vec<(String, f64)>,
     metrics: BTreeMap<String, crate::metrics::Metric>,
     dimensionless: BTreeMap<String, f64>,
@@ -428,6 +430,7 @@ impl RunState {
             "schedule": plan.schedule.iter().map(|p| p.name()).collect::<Vec<_>>(),
             "process_layout": if opts.in_process { "in-process" } else { "processes" },
             "pipelined": self.pipelined,
+            "seconds_waiting_for_input": self.seconds_waiting,
             "steps": self.steps_done,
             "steps_requested": scene.scene.time.steps,
             "dt": scene.scene.time.dt,
@@ -562,7 +565,7 @@ fn drive(
                     step,
                     send_next,
                     nodes,
-                    &mut st.seconds_per_phase,
+                    (&mut st.seconds_per_phase, &mut st.seconds_waiting),
                     opts.node_timeout,
                 )?;
                 next_sent = b.sent_early(step + 1);

@@ -44,12 +44,13 @@ pub struct Awaited {
     pub step: u64,
 }
 
-/// A phase's report and the seconds it ran inside the node, from the arrival of its input to
-/// its end.
+/// A phase's report, the seconds it ran inside the node (from the arrival of its input to its
+/// end) and the seconds it waited for that input before.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 pub struct TimedReport {
     pub report: PhaseReport,
     pub seconds: f64,
+    pub waited: f64,
 }
 
 /// A node's answer to one [`Command`].

@@ -203,11 +203,13 @@ impl Batch<'_> {
         let mut reports = Vec::with_capacity(phases.len());
         for order in phases {
             let phase = order.phase;
+            let mut waited = 0.0;
             if let Some(awaited) = order.awaits {
                 let kind = super::input_wait_kind(phase);
                 let start = std::time::Instant::now();
                 let interrupted = self.wait_for_input(exchange, awaited, kind)?;
                 self.poller.record(kind, start.elapsed());
+                waited = start.elapsed().as_secs_f64();
                 if let Some(request) = interrupted {
                     let message = format!(
                         "phase {phase} of step {step} was still waiting for its input \
@@ -232,6 +234,7 @@ impl Batch<'_> {
             reports.push(TimedReport {
                 report,
                 seconds: start.elapsed().as_secs_f64(),
+                waited,
             });
             if let Some(peer) = &order.then_wake {
                 self.peers.wake(exchange.node(), self.prefix, peer)?;
