@@ -49,6 +49,23 @@ fn pipelined_lock_step_and_in_process_runs_give_the_same_bits() {
         serde_json::from_str::<serde_json::Value>(&text).unwrap()["pipelined"].clone()
     };
     assert_eq!(pipelined_flag(&pipelined), true);
+    let waits = |dir: &std::path::Path| {
+        let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()["seconds_waiting_for_input"]
+            .clone()
+    };
+    // The phases that read the other node's output waited (or checked) for it; the others
+    // and a lock-step run report nothing.
+    let w = waits(&pipelined);
+    for phase in [
+        "fluid-momentum-exchange",
+        "fibre-velocities",
+        "fluid-penalty",
+    ] {
+        assert!(w[phase].as_f64().unwrap() >= 0.0, "{w}");
+    }
+    assert_eq!(w["fluid-phase-field"].as_f64(), Some(0.0), "{w}");
+    assert_eq!(waits(&lock_step), serde_json::json!({}));
     assert_eq!(pipelined_flag(&lock_step), false);
     assert_eq!(pipelined_flag(&in_process), false);
     same_run(&pipelined, &lock_step, "pipelined against lock-step");
