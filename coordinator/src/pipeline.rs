@@ -13,6 +13,14 @@
 //! the other node overwrites, the bead states `fluid-phase-field` reads, the fluid node holds
 //! already from the penalty of the step before; it reads them only on the first step of a run,
 //! which is therefore run lock-step.
+//!
+//! The exception to "a step starts when the one before has ended": a node whose batch starts
+//! with a phase that neither reads nor publishes another node's data (`fluid-phase-field`)
+//! gets its next batch together with the current one ([`Batches::run_step`] with
+//! `send_next`) and queues it, so it can go on while the coordinator finishes the step. The
+//! runner allows it only where nothing happens between the steps that would see the node's
+//! state move on: not before the last step, a checkpoint, a possible stop at rest, or after
+//! Ctrl-C.
 use crate::links::LinkFailure;
 use crate::runner::{fail, node_failed, Node, RunError};
 use cosim::{Awaited, Command, Phase, PhaseOrder, PhaseReport, Port, Reply};
