@@ -38,7 +38,7 @@ pub struct RunOptions {
     /// Continue from the checkpoint in this folder instead of starting at step 0.
     pub resume: Option<PathBuf>,
     /// As processes: run one phase at a time through the coordinator instead of pipelined
-    /// batches (see [`pipeline`]).
+    /// batches (see `coordinator/src/pipeline.rs`).
     pub lock_step: bool,
 }
 
