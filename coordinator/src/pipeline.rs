@@ -15,8 +15,9 @@
 //! which is therefore run lock-step.
 //!
 //! The exception to "a step starts when the one before has ended": a node whose batch starts
-//! with a phase that neither reads nor publishes another node's data (`fluid-phase-field`)
-//! gets its next batch together with the current one ([`Batches::run_step`] with
+//! with a phase that reads nothing of the other node's and publishes no bead states
+//! (`fluid-phase-field`, FPD's `fibre-forces`) gets its next batch together with the current
+//! one ([`Batches::run_step`] with
 //! `send_next`) and queues it, so it can go on while the coordinator finishes the step. The
 //! runner allows it only where nothing happens between the steps that would see the node's
 //! state move on: not before the last step, a checkpoint, a possible stop at rest, or after
@@ -101,9 +102,13 @@ impl Batches {
         Command::RunPhases { step, phases }
     }
 
-    /// Nodes whose batch may go out a step early: its first phase neither reads nor publishes
-    /// anything of another node (`fluid-phase-field`), so it can start as soon as the node has
-    /// finished the step before, while the coordinator is still busy with that step.
+    /// Nodes whose batch may go out a step early: its first phase reads nothing the other node
+    /// publishes in the step, and publishes nothing or only what the other node reads later in
+    /// the step (`fluid-phase-field`; FPD's `fibre-forces`, read only by the next lattice
+    /// step). Not bead states: the coordinator reads those between the steps, and a later
+    /// phase of the current step may still be waiting for the last ones. Such a batch can
+    /// start as soon as its node has finished the step before, while the coordinator is still
+    /// busy with that step.
     fn starts_alone(&self, o: usize) -> bool {
         let list = &self
             .per_node
@@ -111,8 +116,9 @@ impl Batches {
             .find(|(n, _)| *n == o)
             .expect("a node of the plan")
             .1;
-        list.first()
-            .is_some_and(|(phase, _, _)| phase.input(0).is_none() && phase.output().is_none())
+        list.first().is_some_and(|(phase, _, _)| {
+            phase.input(0).is_none() && phase.output() != Some(Port::BeadStates)
+        })
     }
 
     /// Whether the batch of `step` went out early to some node.
@@ -265,8 +271,14 @@ mod tests {
                 ),
             ]
         );
+        // Only the phase field may start a step early under SPM: the fibre node's first
+        // phase publishes bead states.
+        assert!(b.starts_alone(1) && !b.starts_alone(0));
+        let b = Batches::new(&spm[1..], &[0, 1, 0, 1], &names);
+        assert!(!b.starts_alone(0) && !b.starts_alone(1));
         let fpd = [FibreForces, FluidLatticeStep, FibreAdvance];
         let b = Batches::new(&fpd, &[0, 1, 0], &names);
+        assert!(b.starts_alone(0) && !b.starts_alone(1));
         assert_eq!(
             b.per_node,
             vec![
