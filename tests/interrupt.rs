@@ -3,7 +3,6 @@
 mod common;
 use common::*;
 use coordinator::mcap_log::read_topic;
-use std::time::{Duration, Instant};
 
 #[test]
 fn sigint_ends_the_run_cleanly() {
@@ -22,23 +21,7 @@ fn sigint_ends_the_run_cleanly() {
         .spawn()
         .unwrap();
     // Wait until the run is under way (first outputs logged), then interrupt it.
-    let t0 = Instant::now();
-    while !out.join("run.mcap").exists()
-        || std::fs::metadata(out.join("run.mcap")).unwrap().len() < 20_000
-    {
-        assert!(
-            t0.elapsed() < Duration::from_secs(60),
-            "the run did not start"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let pid = child.id().to_string();
-    assert!(std::process::Command::new("kill")
-        .args(["-INT", &pid])
-        .status()
-        .unwrap()
-        .success());
-    let o = child.wait_with_output().unwrap();
+    let o = interrupt_when_logged(child, &out, 20_000);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("interrupted at step"), "{err}");

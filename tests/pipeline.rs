@@ -163,21 +163,7 @@ fn an_interrupted_pipelined_run_resumes_to_the_same_bits() {
         .spawn()
         .unwrap();
     // Interrupt once the run is under way (its first outputs are logged).
-    let t0 = Instant::now();
-    while std::fs::metadata(stopped.join("run.mcap")).map_or(0, |m| m.len()) < 5_000 {
-        assert!(
-            t0.elapsed() < Duration::from_secs(60),
-            "the run did not start"
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    let pid = child.id().to_string();
-    assert!(std::process::Command::new("kill")
-        .args(["-INT", &pid])
-        .status()
-        .unwrap()
-        .success());
-    let out = child.wait_with_output().unwrap();
+    let out = interrupt_when_logged(child, &stopped, 5_000);
     let err = String::from_utf8_lossy(&out.stderr);
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(stopped.join("summary.json")).unwrap())

@@ -109,3 +109,23 @@ pub fn run_scene(
         Err(String::from_utf8_lossy(&o.stderr).into_owned())
     }
 }
+
+/// Wait until the run writing into `out` is under way (its MCAP log has reached `bytes`,
+/// within 60 s), then send the coordinator `child` SIGINT (Ctrl-C) and collect its output.
+pub fn interrupt_when_logged(child: std::process::Child, out: &Path, bytes: u64) -> Output {
+    let t0 = std::time::Instant::now();
+    while std::fs::metadata(out.join("run.mcap")).map_or(0, |m| m.len()) < bytes {
+        assert!(
+            t0.elapsed() < std::time::Duration::from_secs(60),
+            "the run did not start"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let pid = child.id().to_string();
+    assert!(Command::new("kill")
+        .args(["-INT", &pid])
+        .status()
+        .unwrap()
+        .success());
+    child.wait_with_output().unwrap()
+}
