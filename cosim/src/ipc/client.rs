@@ -226,8 +226,8 @@ impl NodeClient {
         Ok(())
     }
 
-    /// Wait for the reply to the request sent last, up to the overall timeout
-    /// ([`NodeClient::set_timeout`]).
+    /// Wait for the reply to the oldest request not yet answered, up to the overall timeout
+    /// ([`NodeClient::set_timeout`]) counted from when it was sent.
     pub fn receive(&mut self) -> Result<Reply, LinkError> {
         loop {
             if let Some(reply) = self.receive_within(BLOCK_SLICE)? {
@@ -245,8 +245,8 @@ impl NodeClient {
     }
 
     /// The reply to the oldest request not yet answered, if it comes within `limit` (`Ok(None)`
-    /// if not; the request stays pending). Polls first, unless this kind of wait was long last time; a
-    /// zero `limit` only looks whether the reply is there.
+    /// if not; the request stays pending). Polls first, unless this kind of wait was long last
+    /// time; a zero `limit` only looks whether the reply is there.
     pub fn receive_within(&mut self, limit: Duration) -> Result<Option<Reply>, LinkError> {
         let name = self.name.clone();
         let lost = |message: String| LinkError::Transport {

@@ -68,42 +68,25 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
         poller.record(kind, waiting.elapsed());
         watch.seen_client = true;
         let (reply, done) = match Command::from_bytes(request.payload()) {
-            Ok(Command::RunPhases { step, phases }) => {
-                kind = super::wait_kind(&Command::RunPhases {
-                    step,
-                    phases: phases.last().into_iter().cloned().collect(),
-                });
-                let mut batch = Batch {
-                    server: &server,
-                    listener: &listener,
-                    control: &control,
-                    watch: &mut watch,
-                    poller: &mut poller,
-                    peers: &mut wake_peers,
-                    queue: &mut queue,
-                    prefix,
-                };
-                let (reply, interrupted) = batch.run(component, &mut exchange, step, &phases)?;
-                if let Some(other) = interrupted {
-                    // The coordinator gave up on the step: the batches queued behind this one
-                    // wait for the same node and are answered with an error, unserved.
-                    for queued in queue.drain(..) {
-                        let message = "abandoned: an earlier batch gave way to a new request";
-                        answer(
-                            queued,
-                            &Reply::Error(message.into()),
-                            &replied,
-                            &mut watch,
-                            &control,
-                        )?;
-                    }
-                    queue.push_back(other);
-                }
-                (reply, false)
-            }
             Ok(command) => {
                 kind = super::wait_kind(&command);
-                crate::dispatch(component, &mut exchange, command)
+                match command {
+                    Command::RunPhases { step, phases } => {
+                        let mut batch = Batch {
+                            server: &server,
+                            listener: &listener,
+                            control: &control,
+                            replied: &replied,
+                            watch: &mut watch,
+                            poller: &mut poller,
+                            peers: &mut wake_peers,
+                            queue: &mut queue,
+                            prefix,
+                        };
+                        (batch.run(component, &mut exchange, step, &phases)?, false)
+                    }
+                    other => crate::dispatch(component, &mut exchange, other),
+                }
             }
             Err(message) => (Reply::Error(message), false),
         };
@@ -180,26 +163,29 @@ struct Batch<'a> {
     server: &'a Server<Svc, [u8], (), [u8], ()>,
     listener: &'a Listener<Svc>,
     control: &'a Control,
+    replied: &'a Notifier<Svc>,
     watch: &'a mut Watch,
     poller: &'a mut super::Poller,
     peers: &'a mut Peers,
-    /// Where batches that arrive during a wait are kept for later.
+    /// Requests that arrive during a wait, for the serving loop: batches, kept for later, or
+    /// the request the batch gave way to.
     queue: &'a mut VecDeque<Request>,
     prefix: &'a str,
 }
 
 impl Batch<'_> {
     /// Run the phases in order, each once its input is there; wake the node that waits for
-    /// a phase's output. Returns the reply and, if a new request came while a phase waited
-    /// for its input (the coordinator gave up on this step, e.g. because the other node
-    /// failed), that request: the batch ends there with an error.
+    /// a phase's output. Returns the reply. If a request other than a batch comes while a
+    /// phase waits for its input, the coordinator has given up on this step (e.g. the other
+    /// node failed): the batch ends there with an error, the batches queued behind it are
+    /// answered with an error unserved, and that request is left in the queue.
     fn run(
         &mut self,
         component: &mut dyn Component,
         exchange: &mut IpcExchange,
         step: u64,
         phases: &[PhaseOrder],
-    ) -> Result<(Reply, Option<Request>), IpcError> {
+    ) -> Result<Reply, IpcError> {
         let mut reports = Vec::with_capacity(phases.len());
         for order in phases {
             let phase = order.phase;
@@ -208,16 +194,22 @@ impl Batch<'_> {
                 let kind = super::input_wait_kind(phase);
                 let start = std::time::Instant::now();
                 let interrupted = self.wait_for_input(exchange, awaited, kind)?;
-                self.poller.record(kind, start.elapsed());
-                waited = start.elapsed().as_secs_f64();
+                let elapsed = start.elapsed();
+                self.poller.record(kind, elapsed);
+                waited = elapsed.as_secs_f64();
                 if let Some(request) = interrupted {
-                    let message = format!(
+                    for queued in self.queue.drain(..) {
+                        let message = "abandoned: an earlier batch gave way to a new request";
+                        let reply = Reply::Error(message.into());
+                        answer(queued, &reply, self.replied, self.watch, self.control)?;
+                    }
+                    self.queue.push_back(request);
+                    return Ok(Reply::Error(format!(
                         "phase {phase} of step {step} was still waiting for its input \
                          ({} of step {}) when a new request came",
                         awaited.port.name(),
                         awaited.step
-                    );
-                    return Ok((Reply::Error(message), Some(request)));
+                    )));
                 }
             }
             let start = std::time::Instant::now();
@@ -225,10 +217,11 @@ impl Batch<'_> {
                 crate::dispatch(component, exchange, Command::RunPhase { step, phase });
             let report = match reply {
                 Reply::PhaseDone(r) => r,
-                Reply::Error(m) => return Ok((Reply::Error(format!("phase {phase}: {m}")), None)),
+                Reply::Error(m) => return Ok(Reply::Error(format!("phase {phase}: {m}"))),
                 other => {
-                    let m = format!("phase {phase}: unexpected reply {other:?}");
-                    return Ok((Reply::Error(m), None));
+                    return Ok(Reply::Error(format!(
+                        "phase {phase}: unexpected reply {other:?}"
+                    )))
                 }
             };
             reports.push(TimedReport {
@@ -240,7 +233,7 @@ impl Batch<'_> {
                 self.peers.wake(exchange.node(), self.prefix, peer)?;
             }
         }
-        Ok((Reply::PhasesDone(reports), None))
+        Ok(Reply::PhasesDone(reports))
     }
 
     /// Poll for the awaited publication (unless this kind of wait is long), then block on the
