@@ -43,7 +43,10 @@ pub(crate) struct Batches {
     /// Which node runs each phase of the schedule, in schedule order.
     owner: Vec<usize>,
     schedule: Vec<Phase>,
-    /// The step whose batch went out early to the nodes that start it alone.
+    /// The node whose batch may go out a step early (see [`Batches::starts_alone`]); at most
+    /// one, so that the two nodes never both run ahead of the coordinator.
+    early: Option<usize>,
+    /// The step whose batch went out early.
     sent_early: Option<u64>,
 }
 
@@ -72,12 +75,19 @@ impl Batches {
                 None => per_node.push((o, vec![entry])),
             }
         }
-        Self {
+        let mut b = Self {
             per_node,
             owner: owner.to_vec(),
             schedule: schedule.to_vec(),
+            early: None,
             sent_early: None,
-        }
+        };
+        b.early = b
+            .per_node
+            .iter()
+            .map(|(o, _)| *o)
+            .find(|&o| b.starts_alone(o));
+        b
     }
 
     /// The batch of node `o` for `step`.
@@ -141,22 +151,18 @@ impl Batches {
     ) -> Result<Vec<PhaseReport>, RunError> {
         let sent_early = self.sent_early.take() == Some(step);
         for (o, _) in &self.per_node {
-            if sent_early && self.starts_alone(*o) {
+            if sent_early && self.early == Some(*o) {
                 continue;
             }
             let link = &mut nodes[*o].link;
             link.send(&self.batch(*o, step))
                 .map_err(|e| node_failed(link.name(), step, "", e))?;
         }
-        if send_next {
-            for (o, _) in &self.per_node {
-                if self.starts_alone(*o) {
-                    let link = &mut nodes[*o].link;
-                    link.send(&self.batch(*o, step + 1))
-                        .map_err(|e| node_failed(link.name(), step + 1, "", e))?;
-                    self.sent_early = Some(step + 1);
-                }
-            }
+        if let Some(o) = self.early.filter(|_| send_next) {
+            let link = &mut nodes[o].link;
+            link.send(&self.batch(o, step + 1))
+                .map_err(|e| node_failed(link.name(), step + 1, "", e))?;
+            self.sent_early = Some(step + 1);
         }
         // The node of the schedule's last phase answers last; the others are looked at
         // without blocking while it runs.
@@ -274,11 +280,14 @@ mod tests {
         // Only the phase field may start a step early under SPM: the fibre node's first
         // phase publishes bead states.
         assert!(b.starts_alone(1) && !b.starts_alone(0));
+        assert_eq!(b.early, Some(1));
         let b = Batches::new(&spm[1..], &[0, 1, 0, 1], &names);
         assert!(!b.starts_alone(0) && !b.starts_alone(1));
+        assert_eq!(b.early, None);
         let fpd = [FibreForces, FluidLatticeStep, FibreAdvance];
         let b = Batches::new(&fpd, &[0, 1, 0], &names);
         assert!(b.starts_alone(0) && !b.starts_alone(1));
+        assert_eq!(b.early, Some(0));
         assert_eq!(
             b.per_node,
             vec![
