@@ -22,14 +22,18 @@ pub enum Port {
     BeadForces,
     /// Fluid -> fibre: bead velocities from the flow for the FPD coupling ([`BeadState`]).
     BeadVelocities,
+    /// Fibre -> fluid: bead states after `fibre-positions` (positions n+1, velocities n), a
+    /// port of their own so that they never overwrite the states other readers still need.
+    BeadPositions,
 }
 
 impl Port {
-    pub const ALL: [Port; 4] = [
+    pub const ALL: [Port; 5] = [
         Port::BeadStates,
         Port::BeadImpulses,
         Port::BeadForces,
         Port::BeadVelocities,
+        Port::BeadPositions,
     ];
 
     pub fn name(self) -> &'static str {
@@ -38,6 +42,7 @@ impl Port {
             Port::BeadImpulses => "bead-impulses",
             Port::BeadForces => "bead-forces",
             Port::BeadVelocities => "bead-velocities",
+            Port::BeadPositions => "bead-positions",
         }
     }
 }
@@ -126,9 +131,9 @@ impl<T: Copy> Slot<T> {
 
 #[derive(Default)]
 struct Slots {
-    states: [Slot<BeadState>; 4],
-    impulses: [Slot<BeadImpulse>; 4],
-    forces: [Slot<BeadForce>; 4],
+    states: [Slot<BeadState>; 5],
+    impulses: [Slot<BeadImpulse>; 5],
+    forces: [Slot<BeadForce>; 5],
 }
 
 /// Components linked into one process share one of these (cloning shares the storage).

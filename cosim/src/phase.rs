@@ -44,9 +44,8 @@ impl Phase {
     /// step only when the one before it has ended.
     pub fn input(self, step: u64) -> Option<(Port, u64)> {
         match self {
-            Phase::FluidMomentumExchange | Phase::FluidPenalty => {
-                Some((Port::BeadStates, step + 1))
-            }
+            Phase::FluidMomentumExchange => Some((Port::BeadPositions, step + 1)),
+            Phase::FluidPenalty => Some((Port::BeadStates, step + 1)),
             Phase::FibreVelocities => Some((Port::BeadImpulses, step + 1)),
             Phase::FluidLatticeStep => Some((Port::BeadForces, step)),
             Phase::FibreAdvance => Some((Port::BeadVelocities, step + 1)),
@@ -57,9 +56,8 @@ impl Phase {
     /// The port this phase publishes on (when the scene has beads).
     pub fn output(self) -> Option<Port> {
         match self {
-            Phase::FibrePositions | Phase::FibreVelocities | Phase::FibreAdvance => {
-                Some(Port::BeadStates)
-            }
+            Phase::FibrePositions => Some(Port::BeadPositions),
+            Phase::FibreVelocities | Phase::FibreAdvance => Some(Port::BeadStates),
             Phase::FluidMomentumExchange => Some(Port::BeadImpulses),
             Phase::FibreForces => Some(Port::BeadForces),
             Phase::FluidLatticeStep => Some(Port::BeadVelocities),

@@ -163,10 +163,19 @@ impl Run {
         }
     }
 
-    fn publish(&mut self, step: u64, exchange: &mut dyn Exchange) -> Result<(), ComponentError> {
+    /// Publish the bead states of `step` on `port`: `bead-positions` after fibre-positions,
+    /// `bead-states` otherwise.
+    fn publish(
+        &mut self,
+        step: u64,
+        port: Port,
+        exchange: &mut dyn Exchange,
+    ) -> Result<(), ComponentError> {
         fill_states(&self.fibres, &mut self.states);
-        exchange.publish_states(Port::BeadStates, step, &self.states)?;
-        self.published = step;
+        exchange.publish_states(port, step, &self.states)?;
+        if port == Port::BeadStates {
+            self.published = step;
+        }
         Ok(())
     }
 }
@@ -247,8 +256,14 @@ impl Component for FibreComponent {
                     port: Port::BeadStates,
                     record: "BeadState".into(),
                     description: "all beads, fibres in order, after configure (step 0) and \
-                                  after fibre-positions, fibre-velocities and fibre-advance \
-                                  (step n + 1)"
+                                  after fibre-velocities and fibre-advance (step n + 1)"
+                        .into(),
+                },
+                PortDescription {
+                    port: Port::BeadPositions,
+                    record: "BeadState".into(),
+                    description: "all beads, fibres in order: positions n + 1 with velocities \
+                                  n, after fibre-positions (step n + 1; SPM coupling)"
                         .into(),
                 },
                 PortDescription {
@@ -411,7 +426,7 @@ impl Component for FibreComponent {
             forces: Vec::with_capacity(if fpd { total_beads } else { 0 }),
             velocities: Vec::with_capacity(if fpd { total_beads } else { 0 }),
         };
-        run.publish(0, exchange)?;
+        run.publish(0, Port::BeadStates, exchange)?;
         let configured = Configured {
             beads_per_fibre: run.fibres.iter().map(|f| f.len()).collect(),
             effects: active,
@@ -526,7 +541,15 @@ impl Component for FibreComponent {
                 )))
             }
         }
-        run.publish(step + 1, exchange)?;
+        // The predicted positions go on a port of their own: the bead states of step n + 1
+        // that fibre-velocities publishes are what the fluid's penalty and the coordinator read,
+        // and a pipelined fibre node may predict the next step before they have.
+        let port = if phase == Phase::FibrePositions {
+            Port::BeadPositions
+        } else {
+            Port::BeadStates
+        };
+        run.publish(step + 1, port, exchange)?;
         Ok(run.report())
     }
 
@@ -639,7 +662,7 @@ impl Component for FibreComponent {
     fn publish_restored(&mut self, exchange: &mut dyn Exchange) -> Result<(), ComponentError> {
         match self.run.as_mut() {
             Some(run) => match run.restored_publication.take() {
-                Some(step) => run.publish(step, exchange),
+                Some(step) => run.publish(step, Port::BeadStates, exchange),
                 None => Ok(()),
             },
             None => Ok(()),

@@ -148,7 +148,12 @@ impl Run {
         phase: Phase,
         exchange: &mut dyn Exchange,
     ) -> Result<(), ComponentError> {
-        let h = exchange.read_states(Port::BeadStates, &mut self.states)?;
+        let port = if phase == Phase::FluidMomentumExchange {
+            Port::BeadPositions
+        } else {
+            Port::BeadStates
+        };
+        let h = exchange.read_states(port, &mut self.states)?;
         let expect = if phase == Phase::FluidPhaseField {
             step
         } else {
@@ -275,9 +280,17 @@ impl Component for FluidComponent {
             PortDescription {
                 port: Port::BeadStates,
                 record: "BeadState".into(),
-                description: "all beads, fibres in order: positions n+1 with velocities n \
-                              (fluid-momentum-exchange) and n+1 (fluid-penalty), published \
-                              with step n+1; read only when the scene has fibres"
+                description: "all beads, fibres in order: positions and velocities n+1, \
+                              published with step n+1, read in fluid-penalty (and in \
+                              fluid-phase-field on a run's first step); only with fibres"
+                    .into(),
+            },
+            PortDescription {
+                port: Port::BeadPositions,
+                record: "BeadState".into(),
+                description: "all beads, fibres in order: positions n+1 with velocities n, \
+                              published with step n+1, read in fluid-momentum-exchange; only \
+                              with fibres"
                     .into(),
             },
             PortDescription {

@@ -180,7 +180,7 @@ fn phases_run_in_order_and_inputs_are_checked() {
         .0;
     assert!(e.contains("no publication"), "{e}");
     // States of the wrong step.
-    x.publish_states(Port::BeadStates, 0, &fibre_states(0, 0.0))
+    x.publish_states(Port::BeadPositions, 0, &fibre_states(0, 0.0))
         .unwrap();
     let e = c
         .run_phase(0, Phase::FluidMomentumExchange, &mut x)
@@ -188,7 +188,7 @@ fn phases_run_in_order_and_inputs_are_checked() {
         .0;
     assert!(e.contains("expects the bead states of step 1"), "{e}");
     // Wrong number of beads.
-    x.publish_states(Port::BeadStates, 1, &fibre_states(0, 0.0)[..2])
+    x.publish_states(Port::BeadPositions, 1, &fibre_states(0, 0.0)[..2])
         .unwrap();
     let e = c
         .run_phase(0, Phase::FluidMomentumExchange, &mut x)
@@ -201,7 +201,7 @@ fn phases_run_in_order_and_inputs_are_checked() {
     // Non-finite position.
     let mut bad = fibre_states(0, 0.0);
     bad[1].position[0] = f64::NAN;
-    x.publish_states(Port::BeadStates, 1, &bad).unwrap();
+    x.publish_states(Port::BeadPositions, 1, &bad).unwrap();
     let e = c
         .run_phase(0, Phase::FluidMomentumExchange, &mut x)
         .unwrap_err()
@@ -211,7 +211,7 @@ fn phases_run_in_order_and_inputs_are_checked() {
         "{e}"
     );
     // A good step, then exchange twice.
-    x.publish_states(Port::BeadStates, 1, &fibre_states(0, 0.0))
+    x.publish_states(Port::BeadPositions, 1, &fibre_states(0, 0.0))
         .unwrap();
     let r = c
         .run_phase(0, Phase::FluidMomentumExchange, &mut x)
@@ -226,6 +226,9 @@ fn phases_run_in_order_and_inputs_are_checked() {
         .unwrap_err()
         .0;
     assert!(e.contains("still pending"), "{e}");
+    // The penalty reads the states of fibre-velocities, on their own port.
+    x.publish_states(Port::BeadStates, 1, &fibre_states(0, 0.0))
+        .unwrap();
     let r = c.run_phase(0, Phase::FluidPenalty, &mut x).unwrap();
     let names: Vec<&str> = r.diagnostics.iter().map(|(n, _)| n.as_str()).collect();
     let mut want = DIAGNOSTICS.to_vec();
@@ -283,7 +286,7 @@ fn save_and_restore_are_bit_exact_also_mid_step() {
     // Saved between the two phases of a step (u* pending).
     let (mut a, mut xa, _) = configure(FIBRE_SCENE);
     run(&mut a, &mut xa, 0, 3);
-    xa.publish_states(Port::BeadStates, 4, &fibre_states(3, 0.0))
+    xa.publish_states(Port::BeadPositions, 4, &fibre_states(3, 0.0))
         .unwrap();
     a.run_phase(3, Phase::FluidMomentumExchange, &mut xa)
         .unwrap();

@@ -82,7 +82,7 @@ fn check(dims: u8, grid: &str, force: [f64; 3], cells: f64) {
             ..*s
         })
         .collect();
-    cosim::Exchange::publish_states(&mut x, cosim::Port::BeadStates, n + 1, &before).unwrap();
+    cosim::Exchange::publish_states(&mut x, cosim::Port::BeadPositions, n + 1, &before).unwrap();
     let rep = cosim::Component::run_phase(&mut c, n, cosim::Phase::FluidMomentumExchange, &mut x)
         .unwrap();
     let volume = diag(&rep, "bead_volume");

@@ -33,32 +33,32 @@ struct Lane<T: Record> {
 
 #[derive(Default)]
 struct Lanes {
-    states: [Option<Lane<BeadState>>; 4],
-    impulses: [Option<Lane<BeadImpulse>>; 4],
-    forces: [Option<Lane<BeadForce>>; 4],
+    states: [Option<Lane<BeadState>>; 5],
+    impulses: [Option<Lane<BeadImpulse>>; 5],
+    forces: [Option<Lane<BeadForce>>; 5],
 }
 
 /// A record type that travels on ports.
 trait Record: Copy + Debug + ZeroCopySend + 'static {
     const NAME: &'static str;
-    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; 4];
+    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; 5];
 }
 
 impl Record for BeadState {
     const NAME: &'static str = "BeadState";
-    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; 4] {
+    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; 5] {
         &mut lanes.states
     }
 }
 impl Record for BeadImpulse {
     const NAME: &'static str = "BeadImpulse";
-    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; 4] {
+    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; 5] {
         &mut lanes.impulses
     }
 }
 impl Record for BeadForce {
     const NAME: &'static str = "BeadForce";
-    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; 4] {
+    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; 5] {
         &mut lanes.forces
     }
 }
@@ -171,7 +171,7 @@ impl IpcExchange {
     }
 
     pub fn update_connections(&self) {
-        fn update<T: Record>(lanes: &[Option<Lane<T>>; 4]) {
+        fn update<T: Record>(lanes: &[Option<Lane<T>>; 5]) {
             for lane in lanes.iter().flatten() {
                 if let Some(p) = &lane.publisher {
                     let _ = p.update_connections();

@@ -80,7 +80,8 @@ pub fn exchange_and_penalty(
     states: &[BeadState],
     imp: &mut Vec<BeadImpulse>,
 ) -> PhaseReport {
-    x.publish_states(Port::BeadStates, n + 1, states).unwrap();
+    x.publish_states(Port::BeadPositions, n + 1, states)
+        .unwrap();
     comp.run_phase(n, Phase::FluidMomentumExchange, x).unwrap();
     x.read_impulses(Port::BeadImpulses, imp).unwrap();
     x.publish_states(Port::BeadStates, n + 1, states).unwrap();

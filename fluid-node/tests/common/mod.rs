@@ -37,7 +37,8 @@ pub fn bead_step(
     before: &[BeadState],
     after: &[BeadState],
 ) -> (Vec<BeadImpulse>, PhaseReport) {
-    x.publish_states(Port::BeadStates, n + 1, before).unwrap();
+    x.publish_states(Port::BeadPositions, n + 1, before)
+        .unwrap();
     c.run_phase(n, Phase::FluidMomentumExchange, x).unwrap();
     let mut imp = Vec::new();
     x.read_impulses(Port::BeadImpulses, &mut imp).unwrap();
