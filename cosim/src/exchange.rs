@@ -14,7 +14,8 @@ use std::rc::Rc;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Port {
-    /// Fibre -> fluid, coordinator: bead states ([`BeadState`]) after each fibre phase.
+    /// Fibre -> fluid, coordinator: bead states ([`BeadState`]) at configure, after
+    /// `fibre-velocities` and after `fibre-advance`.
     BeadStates,
     /// Fluid -> fibre: time-integrated hydrodynamic force and torque ([`BeadImpulse`]).
     BeadImpulses,
