@@ -28,6 +28,9 @@ pub enum Port {
     BeadPositions,
 }
 
+/// Number of [`Port`]s; per-port tables are arrays of this length, indexed by `port as usize`.
+pub const PORTS: usize = Port::ALL.len();
+
 impl Port {
     pub const ALL: [Port; 5] = [
         Port::BeadStates,
@@ -132,9 +135,9 @@ impl<T: Copy> Slot<T> {
 
 #[derive(Default)]
 struct Slots {
-    states: [Slot<BeadState>; 5],
-    impulses: [Slot<BeadImpulse>; 5],
-    forces: [Slot<BeadForce>; 5],
+    states: [Slot<BeadState>; PORTS],
+    impulses: [Slot<BeadImpulse>; PORTS],
+    forces: [Slot<BeadForce>; PORTS],
 }
 
 /// Components linked into one process share one of these (cloning shares the storage).

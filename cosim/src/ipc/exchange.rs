@@ -1,6 +1,6 @@
 //! [`IpcExchange`]: the bulk-data [`Exchange`] over iceoryx2 publish-subscribe.
 use super::{create_node, service_name, IpcError};
-use crate::exchange::ExchangeError;
+use crate::exchange::{ExchangeError, PORTS};
 use crate::{BeadForce, BeadImpulse, BeadState, Exchange, ExchangeHeader, Port, PortDescription};
 use iceoryx2::node::{Node, NodeState, NodeView};
 use iceoryx2::port::publisher::Publisher;
@@ -33,32 +33,32 @@ struct Lane<T: Record> {
 
 #[derive(Default)]
 struct Lanes {
-    states: [Option<Lane<BeadState>>; 5],
-    impulses: [Option<Lane<BeadImpulse>>; 5],
-    forces: [Option<Lane<BeadForce>>; 5],
+    states: [Option<Lane<BeadState>>; PORTS],
+    impulses: [Option<Lane<BeadImpulse>>; PORTS],
+    forces: [Option<Lane<BeadForce>>; PORTS],
 }
 
 /// A record type that travels on ports.
 trait Record: Copy + Debug + ZeroCopySend + 'static {
     const NAME: &'static str;
-    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; 5];
+    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; PORTS];
 }
 
 impl Record for BeadState {
     const NAME: &'static str = "BeadState";
-    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; 5] {
+    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; PORTS] {
         &mut lanes.states
     }
 }
 impl Record for BeadImpulse {
     const NAME: &'static str = "BeadImpulse";
-    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; 5] {
+    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; PORTS] {
         &mut lanes.impulses
     }
 }
 impl Record for BeadForce {
     const NAME: &'static str = "BeadForce";
-    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; 5] {
+    fn lanes(lanes: &mut Lanes) -> &mut [Option<Lane<Self>>; PORTS] {
         &mut lanes.forces
     }
 }
@@ -171,7 +171,7 @@ impl IpcExchange {
     }
 
     pub fn update_connections(&self) {
-        fn update<T: Record>(lanes: &[Option<Lane<T>>; 5]) {
+        fn update<T: Record>(lanes: &[Option<Lane<T>>; PORTS]) {
             for lane in lanes.iter().flatten() {
                 if let Some(p) = &lane.publisher {
                     let _ = p.update_connections();
