@@ -222,13 +222,67 @@ impl RunLog {
 
 /// Read back the messages of one topic as JSON values (used by tests and studies).
 pub fn read_topic(path: &Path, topic: &str) -> Result<Vec<serde_json::Value>, String> {
+    let (messages, damage) = salvage_topic(path, topic)?;
+    match damage {
+        None => Ok(messages),
+        Some(e) => Err(e),
+    }
+}
+
+/// Like [`read_topic`], but a log that breaks off (a run killed with SIGKILL, or a full disk,
+/// never writes the footer) gives the messages of every complete record before the break,
+/// with the reason it stopped there. Errors only when the file cannot be read at all.
+pub fn salvage_topic(
+    path: &Path,
+    topic: &str,
+) -> Result<(Vec<serde_json::Value>, Option<String>), String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let mut out = Vec::new();
     for m in mcap::MessageStream::new(&bytes).map_err(mcap_err)? {
-        let m = m.map_err(mcap_err)?;
+        let m = match m {
+            Ok(m) => m,
+            Err(e) => return Ok((out, Some(mcap_err(e)))),
+        };
         if m.channel.topic == topic {
             out.push(serde_json::from_slice(&m.data).map_err(|e| e.to_string())?);
         }
     }
-    Ok(out)
+    Ok((out, None))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run killed before `finish` leaves a log without a footer; `salvage_topic` still reads
+    /// every output before the break, and `read_topic` refuses it.
+    #[test]
+    fn a_log_that_breaks_off_is_read_up_to_its_last_complete_chunk() {
+        let path = std::env::temp_dir().join(format!(
+            "fibre-cosim-salvage-{}-{}.mcap",
+            std::process::id(),
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map(|d| d.as_nanos())
+                .unwrap_or(0)
+        ));
+        let mut log = RunLog::create(&path).unwrap();
+        log.scene("title = \"t\"", &[], &[]).unwrap();
+        for step in 1..=20u64 {
+            let values = vec![("energy".to_string(), step as f64 * 0.5)];
+            log.diagnostics(step, step as f64, &values).unwrap();
+            log.flush().unwrap();
+        }
+        log.finish(&json!({})).unwrap();
+        let whole = read_topic(&path, "/diagnostics").unwrap();
+        assert_eq!(whole.len(), 20);
+
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::write(&path, &bytes[..bytes.len() / 2]).unwrap();
+        let (got, damage) = salvage_topic(&path, "/diagnostics").unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert!(damage.is_some(), "a cut log must say so");
+        assert!(!got.is_empty() && got.len() < 20, "{} messages", got.len());
+        assert_eq!(got[..], whole[..got.len()], "salvaged messages differ");
+    }
 }
