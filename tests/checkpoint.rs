@@ -81,7 +81,39 @@ fn a_resumed_spm_run_ends_in_the_same_bits() {
             extra,
         );
         assert_same_end(&a, &b);
+        let part = b.with_file_name(
+            b.file_name()
+                .unwrap()
+                .to_str()
+                .unwrap()
+                .replace("-resumed-", "-part-"),
+        );
+        assert_wall_time_adds_up(&b, &part);
     }
+}
+
+/// A resumed run's summary counts the wall time from step 0 over both pieces: its own, plus
+/// what the checkpoint recorded (which the first piece spent before writing it).
+fn assert_wall_time_adds_up(resumed: &Path, part: &Path) {
+    let (r, p) = (summary(resumed), summary(part));
+    let ck: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(part.join("checkpoint").join("run.json")).unwrap(),
+    )
+    .unwrap();
+    let before = ck["wall_seconds"]
+        .as_f64()
+        .expect("checkpoint wall_seconds");
+    let own = p["wall_seconds"].as_f64().unwrap();
+    assert!(before > 0.0 && before <= own, "{before} of {own}");
+    assert_eq!(p["wall_seconds_since_step_0"], p["wall_seconds"]);
+    assert_eq!(p["resumed_from_step"], serde_json::Value::Null);
+    assert_eq!(r["resumed_from_step"], 25);
+    let total = r["wall_seconds_since_step_0"].as_f64().unwrap();
+    let this = r["wall_seconds"].as_f64().unwrap();
+    assert!(
+        ((total - this) - before).abs() <= 1e-9 * total,
+        "{total} - {this} != {before}"
+    );
 }
 
 /// A binary fluid (psi saved with the velocity) and the tilt metric, which reads the

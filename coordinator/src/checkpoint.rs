@@ -5,7 +5,8 @@
 //! A checkpoint is a folder (`OUT/checkpoint` by default):
 //! - `run.json`: the step and time reached, the scene text it was made with, the bead states
 //!   of step 0 and the orientation history of fibre 0 (what the metrics need from the part of
-//!   the run already done);
+//!   the run already done), and the wall seconds spent from step 0 to the checkpoint over
+//!   all pieces of the run;
 //! - `NODE.state`: each node's `SaveState` answer, as it gave it.
 //!
 //! Writing replaces the folder's files one by one through temporary names, so that a run
@@ -32,6 +33,10 @@ pub struct RunCheckpoint {
     /// angular velocity).
     pub initial: Vec<[u64; 13]>,
     pub trajectory: Trajectory,
+    /// Wall seconds from step 0 to this checkpoint, summed over every piece of the run; absent
+    /// when a piece did not record it (checkpoints written before this field existed).
+    #[serde(default)]
+    pub wall_seconds: Option<f64>,
 }
 
 fn bits(s: &BeadState) -> [u64; 13] {
@@ -65,6 +70,7 @@ impl RunCheckpoint {
         scene_toml: &str,
         initial: &[BeadState],
         trajectory: &Trajectory,
+        wall_seconds: Option<f64>,
     ) -> Self {
         Self {
             format: FORMAT.into(),
@@ -73,6 +79,7 @@ impl RunCheckpoint {
             scene_toml: scene_toml.into(),
             initial: initial.iter().map(bits).collect(),
             trajectory: trajectory.clone(),
+            wall_seconds,
         }
     }
 
@@ -185,7 +192,7 @@ mod tests {
     fn a_resumed_scene_may_change_only_length_output_and_analysis() {
         let base =
             "[time]\ndt = 0.5\nsteps = 10\n[output]\ninterval = 5\n[fluid]\nviscosity = 1.0\n";
-        let c = RunCheckpoint::new(4, 2.0, base, &[], &Trajectory::default());
+        let c = RunCheckpoint::new(4, 2.0, base, &[], &Trajectory::default(), None);
         let longer = base
             .replace("steps = 10", "steps = 40")
             .replace("interval = 5", "interval = 2");

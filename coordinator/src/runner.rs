@@ -342,7 +342,11 @@ fn run_on_this_thread(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResul
         }
     };
 
-    let mut state = RunState::default();
+    let mut state = RunState {
+        started: Some(started),
+        wall_before: Some(0.0),
+        ..RunState::default()
+    };
     let outcome = drive(
         scene, opts, &plan, &mut nodes, in_process, &prefix, &mut log, &mut state,
     );
@@ -392,9 +396,22 @@ struct RunState {
     last_diagnostics: Vec<(String, f64)>,
     metrics: BTreeMap<String, crate::metrics::Metric>,
     dimensionless: BTreeMap<String, f64>,
+    /// When this piece of the run started.
+    started: Option<Instant>,
+    /// Wall seconds of the pieces before this one (0 for a run from step 0; None when resumed
+    /// from a checkpoint that did not record them).
+    wall_before: Option<f64>,
+    /// The checkpoint's step, for a resumed run.
+    resumed_from: Option<u64>,
 }
 
 impl RunState {
+    /// Wall seconds from step 0 to now over every piece of the run, if known.
+    fn wall_since_step_0(&self) -> Option<f64> {
+        let now = self.started.map(|t| t.elapsed().as_secs_f64())?;
+        self.wall_before.map(|b| b + now)
+    }
+
     fn summary(
         &self,
         scene: &LoadedScene,
@@ -436,6 +453,8 @@ impl RunState {
             "dt": scene.scene.time.dt,
             "time": self.time,
             "wall_seconds": wall,
+            "wall_seconds_since_step_0": self.wall_before.map(|b| b + wall),
+            "resumed_from_step": self.resumed_from,
             "seconds_per_phase": self.seconds_per_phase,
             "beads_per_fibre": self.configured.beads_per_fibre,
             "time_step_limits": limits,
@@ -517,6 +536,8 @@ fn drive(
     if let Some(ck) = &resumed {
         st.time = ck.time;
         st.steps_done = ck.step;
+        st.wall_before = ck.wall_seconds;
+        st.resumed_from = Some(ck.step);
         trajectory = ck.trajectory.clone();
     }
     if has_beads {
@@ -635,6 +656,7 @@ fn drive(
                 &scene.toml,
                 &initial,
                 &trajectory,
+                st.wall_since_step_0(),
             );
             save_checkpoint(&opts.out.join("checkpoint"), &run, nodes)?;
         }
