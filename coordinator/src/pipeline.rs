@@ -14,14 +14,19 @@
 //! already from the penalty of the step before; it reads them only on the first step of a run,
 //! which is therefore run lock-step.
 //!
-//! The exception to "a step starts when the one before has ended": a node whose batch starts
-//! with a phase that reads nothing of the other node's and publishes no bead states
-//! (`fluid-phase-field`, FPD's `fibre-forces`) gets its next batch together with the current
-//! one ([`Batches::run_step`] with
-//! `send_next`) and queues it, so it can go on while the coordinator finishes the step. The
-//! runner allows it only where nothing happens between the steps that would see the node's
-//! state move on: not before the last step, a checkpoint, a possible stop at rest, or after
-//! Ctrl-C.
+//! The exception to "a step starts when the one before has ended": every node gets its next
+//! batch together with the current one ([`Batches::run_step`] with `send_next`) and queues
+//! it, so the nodes go on from step to step handing over to each other directly while the
+//! coordinator collects the reports and reads the bead states of the step behind. This is
+//! safe because every input a batch reads from the other node in its step is awaited by step
+//! number, and the inputs from the step before (the bead states a lattice step reads) are
+//! published by a phase that comes before one it awaits and overwritten only after it
+//! (FPD: `fibre-advance` of n before `fibre-forces` of n + 1, the next states only after the
+//! lattice step). The coordinator reads the states of step n by step
+//! ([`cosim::Exchange::read_states_of_step`]), so the fibre node may already have published
+//! those of n + 1. The runner allows it only where nothing happens between the steps that
+//! would see a node's state move on: not before the last step, a checkpoint, a possible stop
+//! at rest, or after Ctrl-C.
 use crate::links::LinkFailure;
 use crate::runner::{fail, node_failed, Node, RunError};
 use cosim::{Awaited, Command, Phase, PhaseOrder, PhaseReport, Port, Reply};
@@ -43,9 +48,8 @@ pub(crate) struct Batches {
     /// Which node runs each phase of the schedule, in schedule order.
     owner: Vec<usize>,
     schedule: Vec<Phase>,
-    /// The node whose batch may go out a step early (see [`Batches::starts_alone`]); at most
-    /// one, so that the two nodes never both run ahead of the coordinator.
-    early: Option<usize>,
+    /// The nodes whose batches go out a step early (see [`Batches::can_go_early`]).
+    early: Vec<usize>,
     /// The step whose batch went out early.
     sent_early: Option<u64>,
 }
@@ -79,14 +83,15 @@ impl Batches {
             per_node,
             owner: owner.to_vec(),
             schedule: schedule.to_vec(),
-            early: None,
+            early: Vec::new(),
             sent_early: None,
         };
         b.early = b
             .per_node
             .iter()
             .map(|(o, _)| *o)
-            .find(|&o| b.starts_alone(o));
+            .filter(|&o| b.can_go_early(o))
+            .collect();
         b
     }
 
@@ -112,23 +117,18 @@ impl Batches {
         Command::RunPhases { step, phases }
     }
 
-    /// Nodes whose batch may go out a step early: its first phase reads nothing the other node
-    /// publishes in the step, and publishes nothing or only what the other node reads later in
-    /// the step (`fluid-phase-field`; FPD's `fibre-forces`, read only by the next lattice
-    /// step). Not bead states: the coordinator reads those between the steps, and a later
-    /// phase of the current step may still be waiting for the last ones. Such a batch can
-    /// start as soon as its node has finished the step before, while the coordinator is still
-    /// busy with that step.
-    fn starts_alone(&self, o: usize) -> bool {
+    /// Whether node `o`'s batch may go out a step early: every phase of it that reads the other
+    /// node's data of its step awaits it (by step number), so that it can never read the
+    /// publication of the step before.
+    fn can_go_early(&self, o: usize) -> bool {
         let list = &self
             .per_node
             .iter()
             .find(|(n, _)| *n == o)
             .expect("a node of the plan")
             .1;
-        list.first().is_some_and(|(phase, _, _)| {
-            phase.input(0).is_none() && phase.output() != Some(Port::BeadStates)
-        })
+        list.iter()
+            .all(|(phase, awaits, _)| phase.input(0).is_none() || awaits.is_some())
     }
 
     /// Whether the batch of `step` went out early to some node.
@@ -151,17 +151,19 @@ impl Batches {
     ) -> Result<Vec<PhaseReport>, RunError> {
         let sent_early = self.sent_early.take() == Some(step);
         for (o, _) in &self.per_node {
-            if sent_early && self.early == Some(*o) {
+            if sent_early && self.early.contains(o) {
                 continue;
             }
             let link = &mut nodes[*o].link;
             link.send(&self.batch(*o, step))
                 .map_err(|e| node_failed(link.name(), step, "", e))?;
         }
-        if let Some(o) = self.early.filter(|_| send_next) {
-            let link = &mut nodes[o].link;
-            link.send(&self.batch(o, step + 1))
-                .map_err(|e| node_failed(link.name(), step + 1, "", e))?;
+        if send_next && !self.early.is_empty() {
+            for &o in &self.early {
+                let link = &mut nodes[o].link;
+                link.send(&self.batch(o, step + 1))
+                    .map_err(|e| node_failed(link.name(), step + 1, "", e))?;
+            }
             self.sent_early = Some(step + 1);
         }
         // The node of the schedule's last phase answers last; the others are looked at
@@ -277,19 +279,13 @@ mod tests {
                 ),
             ]
         );
-        // Both the phase field and the fibre's positions could start a step early; only one
-        // node may, the first in the schedule.
-        assert!(b.starts_alone(1) && b.starts_alone(0));
-        assert_eq!(b.early, Some(1));
-        // Without a binary fluid the fibre node's batch goes early (its positions have a port
-        // of their own); the fluid's first phase reads them.
+        // Every phase that reads the other node's data awaits it: both batches go early.
+        assert_eq!(b.early, vec![1, 0]);
         let b = Batches::new(&spm[1..], &[0, 1, 0, 1], &names);
-        assert!(b.starts_alone(0) && !b.starts_alone(1));
-        assert_eq!(b.early, Some(0));
+        assert_eq!(b.early, vec![0, 1]);
         let fpd = [FibreForces, FluidLatticeStep, FibreAdvance];
         let b = Batches::new(&fpd, &[0, 1, 0], &names);
-        assert!(b.starts_alone(0) && !b.starts_alone(1));
-        assert_eq!(b.early, Some(0));
+        assert_eq!(b.early, vec![0, 1]);
         assert_eq!(
             b.per_node,
             vec![
@@ -306,5 +302,9 @@ mod tests {
                 ),
             ]
         );
+        // A phase whose input comes from the step before (no producer earlier in the step)
+        // awaits nothing, so its node stays in step.
+        let b = Batches::new(&[FluidPenalty, FibreVelocities], &[1, 0], &names);
+        assert_eq!(b.early, Vec::<usize>::new());
     }
 }

@@ -628,16 +628,17 @@ fn drive(
             .is_some_and(|tol| is_at_rest(&st.last_diagnostics, tol, load_scale));
         // With the next step's batch out, Ctrl-C ends the run after that step.
         let stop = INTERRUPTED.load(Ordering::SeqCst) && !next_sent;
+        // By step: with the next batches out, the fibre node may have published step n + 2's.
         if track {
             exchange
-                .read_states(Port::BeadStates, &mut states)
+                .read_states_of_step(Port::BeadStates, step + 1, &mut states)
                 .map_err(|e| fail(format!("reading bead states at step {}: {e}", step + 1)))?;
             trajectory.push(st.time, &states, beads[0]);
         }
         if (step + 1) % interval == 0 || step + 1 == steps || at_rest || stop {
             if has_beads {
                 exchange
-                    .read_states(Port::BeadStates, &mut states)
+                    .read_states_of_step(Port::BeadStates, step + 1, &mut states)
                     .map_err(|e| fail(format!("reading bead states at step {}: {e}", step + 1)))?;
                 log.bead_states(step + 1, st.time, &beads, &radii, &states)
                     .map_err(fail)?;

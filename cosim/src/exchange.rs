@@ -68,6 +68,12 @@ pub enum ExchangeError {
     NothingPublished(&'static str),
     #[error("port {port}: {message}")]
     Transport { port: &'static str, message: String },
+    #[error("port {port}: wanted the publication of step {wanted}, found step {found}")]
+    NotAtStep {
+        port: &'static str,
+        wanted: u64,
+        found: u64,
+    },
 }
 
 /// Bulk-data transport, as seen by one participant (a node or the coordinator).
@@ -86,6 +92,27 @@ pub trait Exchange {
         port: Port,
         out: &mut Vec<BeadState>,
     ) -> Result<ExchangeHeader, ExchangeError>;
+    /// The publication of step `step` on `port`, even if a newer one has arrived since: the
+    /// coordinator reads the bead states of a step while the nodes may already be on the
+    /// next one (pipelined runs). A transport keeps one publication beyond the one asked for;
+    /// older ones are gone. The default reads the latest and checks its step.
+    fn read_states_of_step(
+        &mut self,
+        port: Port,
+        step: u64,
+        out: &mut Vec<BeadState>,
+    ) -> Result<ExchangeHeader, ExchangeError> {
+        let h = self.read_states(port, out)?;
+        if h.step == step {
+            Ok(h)
+        } else {
+            Err(ExchangeError::NotAtStep {
+                port: port.name(),
+                wanted: step,
+                found: h.step,
+            })
+        }
+    }
     fn publish_impulses(
         &mut self,
         port: Port,

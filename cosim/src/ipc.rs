@@ -67,8 +67,12 @@ pub const SPIN_AFTER_BLOCK: Duration = Duration::from_micros(200);
 pub const BLOCK_SLICE: Duration = Duration::from_millis(50);
 
 /// A wait that lasted longer than this is expected to be long again the next step: block at
-/// once rather than poll (see [`Poller::skips_polling`]).
-pub const LONG_WAIT: Duration = Duration::from_micros(400);
+/// once rather than poll (see [`Poller::skips_polling`]). A waiter that polls takes a core
+/// from the other node's threads; at 400 us the fibre node polled through the first 200 us of
+/// the fluid's 170 us exchange every step of the built-in example (96^2), and the three-process
+/// overhead was 16 %, at 100 us 10 % (60 us: the same pipelined, worse lock-step). At
+/// 256 x 200 the waits are milliseconds and this changes nothing.
+pub const LONG_WAIT: Duration = Duration::from_micros(100);
 /// Kinds of wait a [`Poller`] remembers separately (see [`wait_kind`]): room for one per
 /// phase and one for everything else; a kind beyond it is never remembered (it polls).
 pub const WAIT_KINDS: usize = 24;

@@ -536,6 +536,72 @@ fn exchange_without_serving_publisher() {
     assert!(ipc::resources_of_run(&prefix).is_empty());
 }
 
+/// The coordinator of a pipelined run reads the bead states of step n after the fibre node
+/// may already have published those of n + 1: a by-step read gets n's and keeps n + 1's for
+/// the next read; a step no longer (or not yet) there is an error, never the wrong data.
+#[test]
+fn a_by_step_read_gets_its_step_while_a_newer_one_waits() {
+    let prefix = ipc::new_run_prefix();
+    let mut fibre = IpcExchange::new(&prefix, "fibre").unwrap();
+    let mut coordinator = IpcExchange::new(&prefix, "coordinator").unwrap();
+    coordinator
+        .subscribe(Port::BeadStates, "BeadState")
+        .unwrap();
+    let at = |x: f64| vec![BeadState::at_rest([x; 3])];
+    let mut out = Vec::new();
+    fibre.publish_states(Port::BeadStates, 0, &at(0.0)).unwrap();
+    let h = coordinator
+        .read_states_of_step(Port::BeadStates, 0, &mut out)
+        .unwrap();
+    assert_eq!((h.step, out.clone()), (0, at(0.0)));
+    fibre.publish_states(Port::BeadStates, 1, &at(1.0)).unwrap();
+    fibre.publish_states(Port::BeadStates, 2, &at(2.0)).unwrap();
+    let h = coordinator
+        .read_states_of_step(Port::BeadStates, 1, &mut out)
+        .unwrap();
+    assert_eq!((h.step, out.clone()), (1, at(1.0)));
+    // Step 1 again: still there.
+    coordinator
+        .read_states_of_step(Port::BeadStates, 1, &mut out)
+        .unwrap();
+    assert_eq!(out, at(1.0));
+    fibre.publish_states(Port::BeadStates, 3, &at(3.0)).unwrap();
+    let h = coordinator
+        .read_states_of_step(Port::BeadStates, 2, &mut out)
+        .unwrap();
+    assert_eq!((h.step, out.clone()), (2, at(2.0)));
+    // Step 5 is not published yet: the newest (3) is found instead, and said so.
+    let e = coordinator
+        .read_states_of_step(Port::BeadStates, 5, &mut out)
+        .unwrap_err();
+    assert_eq!(
+        e,
+        ExchangeError::NotAtStep {
+            port: "bead-states",
+            wanted: 5,
+            found: 3
+        }
+    );
+    // A plain read gets the latest.
+    assert_eq!(
+        coordinator
+            .read_states(Port::BeadStates, &mut out)
+            .unwrap()
+            .step,
+        3
+    );
+    // Gone: publications older than the one read last.
+    let e = coordinator
+        .read_states_of_step(Port::BeadStates, 2, &mut out)
+        .unwrap_err();
+    assert!(
+        matches!(e, ExchangeError::NotAtStep { found: 3, .. }),
+        "{e}"
+    );
+    drop((fibre, coordinator));
+    assert!(ipc::resources_of_run(&prefix).is_empty());
+}
+
 #[test]
 fn node_whose_process_dies_is_reported_with_status_and_stderr() {
     let dir = std::env::temp_dir().join(ipc::new_run_prefix());

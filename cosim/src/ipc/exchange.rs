@@ -25,6 +25,9 @@ struct Lane<T: Record> {
     subscriber: Option<Subscriber<Svc, [T], ExchangeHeader>>,
     /// The latest sample received, held in shared memory until a newer one arrives.
     latest: Option<Sample<Svc, [T], ExchangeHeader>>,
+    /// A sample received beyond the step a by-step read asked for
+    /// ([`Exchange::read_states_of_step`]); it becomes `latest` on the next read.
+    ahead: Option<Sample<Svc, [T], ExchangeHeader>>,
     /// Publications by this participant on this lane.
     sequence: u64,
     /// Sequence number of the publication this participant read last (0: none).
@@ -198,7 +201,7 @@ impl IpcExchange {
                 .user_header::<ExchangeHeader>()
                 .history_size(1)
                 .subscriber_max_buffer_size(2)
-                .subscriber_max_borrowed_samples(2)
+                .subscriber_max_borrowed_samples(3)
                 .enable_safe_overflow(true)
                 .max_publishers(2)
                 .max_subscribers(8)
@@ -209,6 +212,7 @@ impl IpcExchange {
                 publisher: None,
                 subscriber: None,
                 latest: None,
+                ahead: None,
                 sequence: 0,
                 read_sequence: 0,
             });
@@ -309,11 +313,39 @@ impl IpcExchange {
 impl<T: Record> Lane<T> {
     /// Receive everything pending, keeping only the newest sample.
     fn drain(&mut self, port: Port) -> Result<(), ExchangeError> {
+        if let Some(a) = self.ahead.take() {
+            self.latest = Some(a);
+        }
         let subscriber = self.subscriber.as_ref().expect("subscribed");
         while let Some(sample) = subscriber
             .receive()
             .map_err(|e| transport(port, "cannot receive", e))?
         {
+            self.latest = Some(sample);
+        }
+        Ok(())
+    }
+
+    /// Receive pending samples up to the newest of step `step` or earlier; the first sample
+    /// of a later step is kept in `ahead` and receiving stops there.
+    fn drain_to_step(&mut self, port: Port, step: u64) -> Result<(), ExchangeError> {
+        match self.ahead.take() {
+            Some(a) if a.user_header().step > step => {
+                self.ahead = Some(a);
+                return Ok(());
+            }
+            Some(a) => self.latest = Some(a),
+            None => {}
+        }
+        let subscriber = self.subscriber.as_ref().expect("subscribed");
+        while let Some(sample) = subscriber
+            .receive()
+            .map_err(|e| transport(port, "cannot receive", e))?
+        {
+            if sample.user_header().step > step {
+                self.ahead = Some(sample);
+                break;
+            }
             self.latest = Some(sample);
         }
         Ok(())
@@ -395,6 +427,40 @@ impl Exchange for IpcExchange {
         out: &mut Vec<BeadState>,
     ) -> Result<ExchangeHeader, ExchangeError> {
         self.read(port, out)
+    }
+    fn read_states_of_step(
+        &mut self,
+        port: Port,
+        step: u64,
+        out: &mut Vec<BeadState>,
+    ) -> Result<ExchangeHeader, ExchangeError> {
+        self.subscriber::<BeadState>(port)?;
+        let lane = self.lanes.states[port as usize]
+            .as_mut()
+            .expect("subscribed");
+        lane.drain_to_step(port, step)?;
+        let not_at = |found: u64| ExchangeError::NotAtStep {
+            port: port.name(),
+            wanted: step,
+            found,
+        };
+        let header = match (&lane.latest, &lane.ahead) {
+            (Some(sample), _) => {
+                out.clear();
+                out.extend_from_slice(sample.payload());
+                *sample.user_header()
+            }
+            (None, Some(later)) => return Err(not_at(later.user_header().step)),
+            // A new reader: the history path of `read`.
+            (None, None) => self.read(port, out)?,
+        };
+        if header.step != step {
+            return Err(not_at(header.step));
+        }
+        if let Some(lane) = self.lanes.states[port as usize].as_mut() {
+            lane.read_sequence = lane.read_sequence.max(header.sequence);
+        }
+        Ok(header)
     }
     fn publish_impulses(
         &mut self,
