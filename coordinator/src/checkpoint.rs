@@ -188,6 +188,19 @@ mod tests {
         assert_eq!(bits(&back), bits(&s));
     }
 
+    /// A checkpoint written before `wall_seconds` existed still reads, with the wall time
+    /// unknown (the resumed run's `wall_seconds_since_step_0` is then null).
+    #[test]
+    fn a_checkpoint_without_wall_seconds_reads_as_unknown() {
+        let c = RunCheckpoint::new(3, 1.5, "", &[], &Trajectory::default(), Some(12.5));
+        let mut v = serde_json::to_value(&c).unwrap();
+        assert_eq!(v["wall_seconds"], 12.5);
+        v.as_object_mut().unwrap().remove("wall_seconds");
+        let old: RunCheckpoint = serde_json::from_value(v).unwrap();
+        assert_eq!(old.wall_seconds, None);
+        assert_eq!((old.step, old.time), (3, 1.5));
+    }
+
     #[test]
     fn a_resumed_scene_may_change_only_length_output_and_analysis() {
         let base =
