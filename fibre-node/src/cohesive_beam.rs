@@ -214,6 +214,7 @@ impl CohesiveBeam {
             stretch: 0.5 * self.axial * s * s,
             bend,
             twist: 0.5 * self.twist * dt * dt,
+            contact: 0.0,
         }
     }
 

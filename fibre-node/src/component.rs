@@ -12,11 +12,12 @@ use cosim::{
 use serde::{Deserialize, Serialize};
 
 /// Names of the diagnostics of every [`PhaseReport`], in their fixed order.
-pub const DIAGNOSTICS: [&str; 7] = [
+pub const DIAGNOSTICS: [&str; 8] = [
     "kinetic_energy",
     "stretch_energy",
     "bend_energy",
     "twist_energy",
+    "contact_energy",
     "elastic_energy",
     "max_speed",
     "max_net_force",
@@ -153,7 +154,16 @@ impl Run {
             vmax = vmax.max(f.max_speed());
             fmax = fmax.max(f.max_net_force());
         }
-        let values = [ke, e.stretch, e.bend, e.twist, e.total(), vmax, fmax];
+        let values = [
+            ke,
+            e.stretch,
+            e.bend,
+            e.twist,
+            e.contact,
+            e.total(),
+            vmax,
+            fmax,
+        ];
         PhaseReport {
             diagnostics: DIAGNOSTICS
                 .iter()
@@ -218,6 +228,7 @@ impl Component for FibreComponent {
                 param("fibre.N.start", len, Some("[0.0, 0.0, 0.0]"), "position of bead 0"),
                 param("fibre.N.direction", "1", Some("[1.0, 0.0, 0.0]"), "direction of the straight initial fibre (normalised; z = 0 in 2D)"),
                 param("fibre.N.spacing", len, Some("2 bead_radius"), "initial and rest distance between neighbouring beads"),
+                param("fibre.N.self_contact", "1", Some("false"), "true: beads that are not neighbours along the chain repel while their spheres overlap, with the fibre's axial bond stiffness (excluded volume; neither paper has it, so off by default)"),
                 param("fibre.N.initial_bend", len, Some("0.0"), "amplitude of an S-shaped initial offset across direction (one sine wave along the fibre): seeds buckling; the fibre is at rest but not stress-free"),
                 param("fibre.N.clamp", "1", Some("[]"), "indices of clamped beads (negative counts from the end): fixed position and orientation; under fpd-lbm held in place by a proportional-integral force (its steady value is minus the drag)"),
                 param("fibre.N.loads", "1", Some("[]"), "constant point loads: tables { bead, force, torque }"),

@@ -55,6 +55,8 @@ pub struct FibreConfig {
     /// Amplitude (length) of an S-shaped initial offset of the beads across `direction`
     /// (0: straight).
     pub initial_bend: f64,
+    /// Non-neighbouring beads repel while they overlap ([`crate::self_contact`]).
+    pub self_contact: bool,
     /// Resolved, sorted, without duplicates.
     pub clamp: Vec<usize>,
     pub loads: Vec<LoadConfig>,
@@ -144,6 +146,8 @@ struct RawFibre {
     direction: Option<[f64; 3]>,
     spacing: Option<f64>,
     initial_bend: Option<f64>,
+    #[serde(default)]
+    self_contact: bool,
     #[serde(default)]
     clamp: Vec<i64>,
     #[serde(default)]
@@ -569,6 +573,7 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         direction,
         spacing,
         initial_bend,
+        self_contact: raw.self_contact,
         clamp,
         loads,
         damping,

@@ -9,12 +9,14 @@ pub struct Energies {
     pub bend: f64,
     /// Torsion (L2020 eqs. 19-20). Zero in 2D and for the bead-spring model.
     pub twist: f64,
+    /// Overlap of non-neighbouring beads (`fibre.N.self_contact`; zero without it).
+    pub contact: f64,
 }
 
 impl Energies {
     /// Total elastic energy.
     pub fn total(&self) -> f64 {
-        self.stretch + self.bend + self.twist
+        self.stretch + self.bend + self.twist + self.contact
     }
 }
 
@@ -23,5 +25,6 @@ impl std::ops::AddAssign for Energies {
         self.stretch += o.stretch;
         self.bend += o.bend;
         self.twist += o.twist;
+        self.contact += o.contact;
     }
 }

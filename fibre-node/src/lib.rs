@@ -3,6 +3,7 @@
 //! - [`cohesive_beam`]: L2020 cohesive beam (quaternion beads; stretch, bend, twist);
 //! - [`bead_spring`]: S2023 bead-spring chain (stretch, bend), 2D or 3D;
 //! - [`fibre`]: one fibre's state, bead mass and inertia, the split symplectic integrator;
+//! - [`self_contact`]: optional excluded volume between non-neighbouring beads;
 //! - [`stability`]: the beam-stiffness time-step limit;
 //! - [`config`]: the `[[fibre]]` part of a scene;
 //! - [`component`]: [`FibreComponent`], the [`cosim::Component`] the executable serves;
@@ -14,6 +15,7 @@ pub mod config;
 pub mod energies;
 pub mod fibre;
 pub mod quaternion;
+pub mod self_contact;
 pub mod spm_exchange;
 pub mod stability;
 
