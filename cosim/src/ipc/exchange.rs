@@ -313,17 +313,7 @@ impl IpcExchange {
 impl<T: Record> Lane<T> {
     /// Receive everything pending, keeping only the newest sample.
     fn drain(&mut self, port: Port) -> Result<(), ExchangeError> {
-        if let Some(a) = self.ahead.take() {
-            self.latest = Some(a);
-        }
-        let subscriber = self.subscriber.as_ref().expect("subscribed");
-        while let Some(sample) = subscriber
-            .receive()
-            .map_err(|e| transport(port, "cannot receive", e))?
-        {
-            self.latest = Some(sample);
-        }
-        Ok(())
+        self.drain_to_step(port, u64::MAX)
     }
 
     /// Receive pending samples up to the newest of step `step` or earlier; the first sample
