@@ -14,6 +14,8 @@
 use cosim::{Component, Exchange, InProcessExchange, Phase, Port};
 use criterion::{criterion_group, criterion_main, Criterion};
 use fluid_node::FluidComponent;
+#[path = "common/pool_thread.rs"]
+mod pool_thread;
 #[path = "common/spm_chain.rs"]
 mod spm_chain;
 use spm_chain::{centre, chain, exchange_and_penalty, grid_toml, spm_scene_head};
@@ -36,7 +38,7 @@ fn bench_case(c: &mut Criterion, name: &str, dims: usize, grid: [usize; 3], bead
     let mut imp = Vec::with_capacity(beads);
     let mut group = spm_chain::group(c, "capillary_step", dims, grid);
     group.bench_function(name, |b| {
-        spm_chain::on_pool_thread(|| {
+        pool_thread::on_pool_thread(|| {
             b.iter(|| {
                 let at_n = chain(beads, centre, dims, n);
                 let at_n1 = chain(beads, centre, dims, n + 1);
