@@ -122,6 +122,9 @@ pub struct FpdScene {
     /// `max|u| dx / nu` with the fastest wall or stream, checked against
     /// [`MAX_CELL_REYNOLDS`].
     pub cell_reynolds: f64,
+    /// `max|u| / c_s` with the fastest wall or stream (c_s = 1/sqrt 3): the lattice's
+    /// compressibility error grows as its square.
+    pub mach: f64,
 }
 
 /// Read and check the FPD part of a scene.
@@ -290,6 +293,7 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
         solid_layers,
         stream,
         cell_reynolds: cell_re,
+        mach: fastest * 3f64.sqrt(),
     })
 }
 
@@ -374,6 +378,7 @@ impl FpdRun {
             ),
             ("fluid.interface_thickness".into(), scene.coupling.xi()),
             ("fluid.cell_reynolds".into(), scene.cell_reynolds),
+            ("fluid.mach".into(), scene.mach),
         ];
         if let Some(s) = &scene.stream {
             let d = 2.0 * scene.coupling.radius;
