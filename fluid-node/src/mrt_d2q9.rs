@@ -216,8 +216,9 @@ fn run(src: &[f64], start: usize, m: usize) -> &[f64] {
     &src[start..start + m]
 }
 
-/// Flow statistics of one row, gathered by the step from the velocities its collisions
-/// used: the largest |u|^2 (NaN if any node was NaN) and the sum of u_x along the row.
+/// Flow statistics of one row, gathered by the step from the populations it collided (the
+/// velocity u = (j + F/2) / rho of each node, as the collision uses it): the largest |u|^2
+/// (NaN if any node was NaN) and the sum of u_x along the row.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 struct RowStats {
     max_speed_sq: f64,
