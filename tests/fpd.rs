@@ -321,11 +321,14 @@ fn s_turn_fold_converges_as_the_mach_number_squared() {
             m["label"],
             m["note"]
         );
-        (e, m["label"].as_str().unwrap().to_string())
+        let notes = s["notes"].as_array().unwrap().len();
+        (e, m["label"].as_str().unwrap().to_string(), notes)
     };
-    let (e1, l1) = run(0.025);
-    let (e2, _) = run(0.05);
-    let (e3, l3) = run(0.1);
+    let (e1, l1, n1) = run(0.025);
+    let (e2, _, n2) = run(0.05);
+    let (e3, l3, n3) = run(0.1);
+    // Above Ma = 0.1 the summary carries a note saying so (fpd_lbm::NOTE_MACH).
+    assert_eq!((n1, n2, n3), (0, 0, 1));
     // Ma doubles from run to run: the differences shrink by 2^p.
     let order = ((e2 - e3) / (e1 - e2)).log2();
     println!("observed order in Ma: {order:.2}");
@@ -335,6 +338,28 @@ fn s_turn_fold_converges_as_the_mach_number_squared() {
     assert_eq!(l3, "s-turn");
     assert_eq!(l1, "jeffery");
     assert!(limit > 0.95, "limit {limit}");
+}
+
+/// `coordinator check` shows the note on the Mach number for a scene with a fibre above
+/// Ma = 0.1 (the paper-resolution scene, walls at -+0.1: Ma 0.173), and none at 0.087.
+#[test]
+fn check_notes_a_high_lattice_mach_number() {
+    let text = |scene: &str| {
+        let cfg = config(scene);
+        let out = coordinator(&["check", cfg.to_str().unwrap()]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let high = text("fpd/fig7_jeffery_paper_resolution.toml");
+    assert!(
+        high.contains("note:     fluid (fpd-lbm): the lattice Mach number is 0.173"),
+        "{high}"
+    );
+    assert!(!text("fpd/flexible_shear.toml").contains("note:"));
 }
 
 /// S2023 Fig. 4 on a small box: a held cylinder (d = 4) in a uniform stream at Re = 10

@@ -167,6 +167,9 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             for (name, v) in &configured.derived {
                 println!("derived:  {name} = {v:.6e}");
             }
+            for n in &configured.notes {
+                println!("note:     {n}");
+            }
             println!("ok: the scene is valid; nothing was run");
             Ok(())
         }

@@ -181,6 +181,7 @@ fn describe_and_configure(
         }
         all.time_step_limits.extend(c.time_step_limits);
         all.derived.extend(c.derived);
+        all.notes.extend(c.notes);
     }
     Ok(all)
 }
@@ -459,6 +460,7 @@ impl RunState {
             "beads_per_fibre": self.configured.beads_per_fibre,
             "time_step_limits": limits,
             "derived": derived,
+            "notes": self.configured.notes,
             "dimensionless": self.dimensionless,
             "final_diagnostics": diagnostics,
             "metrics": self.metrics,
@@ -508,6 +510,9 @@ fn drive(
                 format!("processes (run prefix {prefix})")
             }
         );
+        for n in &st.configured.notes {
+            eprintln!("note:     {n}");
+        }
     }
     log.scene(&scene.toml, &st.effects, &schedule_names)
         .map_err(fail)?;

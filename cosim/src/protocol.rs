@@ -80,6 +80,10 @@ pub struct Configured {
     pub time_step_limits: Vec<(String, f64)>,
     /// Dimensionless numbers and derived quantities worth reporting, by name.
     pub derived: Vec<(String, f64)>,
+    /// Advice for the user on a scene the node runs but may resolve poorly (not an error):
+    /// printed before the run and by `coordinator check`, kept in the summary.
+    #[serde(default)]
+    pub notes: Vec<String>,
 }
 
 /// What a node reports after one phase: scalar diagnostics by name, in a fixed order.

@@ -443,6 +443,7 @@ impl Component for FibreComponent {
             effects: active,
             time_step_limits: limits,
             derived,
+            notes: Vec::new(),
         };
         self.run = Some(run);
         Ok(configured)

@@ -482,6 +482,7 @@ impl Component for FluidComponent {
                 .map(|l| (l.name.to_string(), l.dt_max))
                 .collect(),
             derived,
+            notes: Vec::new(),
         };
         self.run = Some(Run {
             profile: vec![0.0; grid.ny],

@@ -34,6 +34,10 @@ pub const ABORT_MACH: f64 = 0.7;
 /// 15 553), 9 and 10 (within 1 000-5 000 steps) whatever U, d or tau; a Couette flow without
 /// beads runs at 10 and blows up at 12. It is a limit on u / (tau - 1/2), not on tau alone.
 pub const MAX_CELL_REYNOLDS: f64 = 8.0;
+/// Above this Mach number (fastest wall or stream) a scene with beads gets a note: measured,
+/// the fold of a flexible fibre deepens as Ma^2 (docs/validation/fpd.md: S2023's K = 0.33
+/// fibre folds to 0.950 of its contour at Ma 0.087, 0.930 at 0.173, ~0.958 as Ma -> 0).
+pub const NOTE_MACH: f64 = 0.1;
 
 /// Diagnostics after `fluid-lattice-step`, in their fixed order; with walls
 /// [`crate::COUETTE_DIAGNOSTIC`] follows.
@@ -424,6 +428,18 @@ impl FpdRun {
                 }
             }
         }
+        let mut notes = Vec::new();
+        if total_beads > 0 && scene.mach > NOTE_MACH {
+            notes.push(format!(
+                "fluid (fpd-lbm): the lattice Mach number is {:.3} (fastest wall or stream), \
+                 above {NOTE_MACH}: the lattice's compressibility error grows as Ma^2, and a \
+                 flexible fibre folds deeper than in the incompressible limit (S2023's K = 0.33 \
+                 fibre: 0.930 of its contour at Ma 0.173, about 0.958 as Ma -> 0; a rigid \
+                 fibre's period by 1.5 % between Ma 0.043 and 0.173; docs/validation/fpd.md). To check a \
+                 result, lower the wall speed and the viscosity together (same Reynolds number)",
+                scene.mach
+            ));
+        }
         let run = FpdRun {
             lattice,
             coupling,
@@ -441,6 +457,7 @@ impl FpdRun {
             effects: active,
             time_step_limits: Vec::new(),
             derived,
+            notes,
         };
         Ok((run, configured))
     }
