@@ -304,7 +304,9 @@ fn step_row(
     }
     // The statistics in a second pass over the row's populations, still in cache: folded
     // into the collision loop above (in-order sum, NaN-aware maximum), they cost the loop
-    // its vectorisation and half its throughput.
+    // its vectorisation and half its throughput. Keep the collision loop free of anything
+    // carried from node to node, and re-run `cargo bench -p fluid-node --bench lbm_step`
+    // after changing it (figures in docs/performance.md).
     for k in 0..m {
         let f = [
             a0[k], a1[k], a2[k], a3[k], a4[k], a5[k], a6[k], a7[k], a8[k],
