@@ -195,3 +195,41 @@ fn fluid_keys_are_checked_by_the_fluid_node() {
         &["fluid.method", "lbm"],
     );
 }
+
+/// A metric that cannot be computed (here: a tumbling period from a run too short to pass
+/// the vertical twice) does not fail the finished run: the run completes, exits 0, keeps the
+/// other metrics, and names the missing one with the reason in the output and in the
+/// summary's `metric_errors`.
+#[test]
+fn a_metric_that_cannot_be_computed_does_not_fail_the_run() {
+    let out = out_dir("metric-not-computed");
+    let cfg = config("spm/jeffery_rigid.toml");
+    let o = coordinator(&[
+        "run",
+        cfg.to_str().unwrap(),
+        "--in-process",
+        "--quiet",
+        "--set",
+        "time.steps=20",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        text.contains("tumbling_period_gamma: not computed: metric `tumbling_period_gamma`: fibre 0 did not pass the vertical twice; run longer"),
+        "{text}"
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["status"], "completed");
+    assert!(s["metric_errors"]["tumbling_period_gamma"]
+        .as_str()
+        .unwrap()
+        .contains("run longer"));
+    let e = s["metrics"]["min_end_to_end_over_length"]["value"]
+        .as_f64()
+        .unwrap();
+    assert!((0.99..=1.0).contains(&e), "{e}");
+    let _ = std::fs::remove_dir_all(&out);
+}

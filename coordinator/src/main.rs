@@ -221,6 +221,11 @@ fn print_result(summary: &serde_json::Value, out: &std::path::Path) {
             }
         }
     }
+    if let Some(m) = summary["metric_errors"].as_object() {
+        for (name, why) in m {
+            println!("  {name}: not computed: {}", why.as_str().unwrap_or(""));
+        }
+    }
     println!(
         "wrote {}/run.mcap and {}/summary.json",
         out.display(),

@@ -230,6 +230,27 @@ fn relative_rotation(initial: [f64; 4], last: [f64; 4]) -> (f64, [f64; 3]) {
 }
 
 /// Compute the requested metrics for fibre 0 from its initial and final bead states.
+/// Every metric of `names` that can be computed, and for each one that cannot, why (a run
+/// too short for a period, a scene without what the metric needs): one metric that fails
+/// does not cost a finished run the others.
+pub fn compute_each(
+    names: &[String],
+    ctx: &Context,
+    dimensionless: &mut BTreeMap<String, f64>,
+) -> (BTreeMap<String, Metric>, BTreeMap<String, String>) {
+    let (mut done, mut failed) = (BTreeMap::new(), BTreeMap::new());
+    for name in names {
+        match compute(std::slice::from_ref(name), ctx, dimensionless) {
+            Ok(m) => done.extend(m),
+            Err(e) => {
+                failed.insert(name.clone(), e);
+            }
+        }
+    }
+    (done, failed)
+}
+
+/// The metrics `names`, or the first error.
 pub fn compute(
     names: &[String],
     ctx: &Context,

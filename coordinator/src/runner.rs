@@ -396,6 +396,8 @@ struct RunState {
     seconds_waiting: BTreeMap<String, f64>,
     last_diagnostics: Vec<(String, f64)>,
     metrics: BTreeMap<String, crate::metrics::Metric>,
+    /// Metrics asked for that could not be computed, with the reason.
+    metric_errors: BTreeMap<String, String>,
     dimensionless: BTreeMap<String, f64>,
     /// When this piece of the run started.
     started: Option<Instant>,
@@ -464,6 +466,7 @@ impl RunState {
             "dimensionless": self.dimensionless,
             "final_diagnostics": diagnostics,
             "metrics": self.metrics,
+            "metric_errors": self.metric_errors,
         })
     }
 }
@@ -698,9 +701,8 @@ fn drive(
         impulses: &impulses,
         trajectory: &trajectory,
     };
-    st.metrics =
-        crate::metrics::compute(&scene.scene.analysis.metrics, &ctx, &mut st.dimensionless)
-            .map_err(fail)?;
+    (st.metrics, st.metric_errors) =
+        crate::metrics::compute_each(&scene.scene.analysis.metrics, &ctx, &mut st.dimensionless);
     Ok(status)
 }
 

@@ -285,6 +285,15 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, replot: bool) -> Result
         };
         let s = &summary;
         let m = &s["metrics"][&study.metric];
+        // A run that completed without the study's metric (too short for a period, ...):
+        // keep the row, say why.
+        let status = match s["metric_errors"][&study.metric].as_str() {
+            Some(why) => {
+                eprintln!("study {}: variant {label}: {why}", study.name);
+                "no metric".to_string()
+            }
+            None => s["status"].as_str().unwrap_or("").to_string(),
+        };
         let point = study
             .diagram
             .as_ref()
@@ -296,7 +305,7 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, replot: bool) -> Result
             relative_error: m["relative_error"].as_f64(),
             wall_seconds: s["wall_seconds"].as_f64().unwrap_or(0.0),
             steps: s["steps"].as_u64().unwrap_or(0),
-            status: s["status"].as_str().unwrap_or("").to_string(),
+            status,
             class: m["label"].as_str().map(str::to_string),
             point,
             resolution,
