@@ -229,28 +229,34 @@ fn relative_rotation(initial: [f64; 4], last: [f64; 4]) -> (f64, [f64; 3]) {
     }
 }
 
-/// Compute the requested metrics for fibre 0 from its initial and final bead states.
 /// Every metric of `names` that can be computed, and for each one that cannot, why (a run
 /// too short for a period, a scene without what the metric needs): one metric that fails
-/// does not cost a finished run the others.
+/// does not cost a finished run the others. The orbit metrics rest on one analysis, so they
+/// are computed (or fail) together.
 pub fn compute_each(
     names: &[String],
     ctx: &Context,
     dimensionless: &mut BTreeMap<String, f64>,
 ) -> (BTreeMap<String, Metric>, BTreeMap<String, String>) {
+    let (orbit, others): (Vec<String>, Vec<String>) = names
+        .iter()
+        .cloned()
+        .partition(|n| ORBIT_METRICS.contains(&n.as_str()));
+    let groups = std::iter::once(orbit)
+        .filter(|g| !g.is_empty())
+        .chain(others.into_iter().map(|n| vec![n]));
     let (mut done, mut failed) = (BTreeMap::new(), BTreeMap::new());
-    for name in names {
-        match compute(std::slice::from_ref(name), ctx, dimensionless) {
+    for group in groups {
+        match compute(&group, ctx, dimensionless) {
             Ok(m) => done.extend(m),
-            Err(e) => {
-                failed.insert(name.clone(), e);
-            }
+            Err(e) => failed.extend(group.into_iter().map(|n| (n, e.clone()))),
         }
     }
     (done, failed)
 }
 
-/// The metrics `names`, or the first error.
+/// Compute the requested metrics for fibre 0 from its initial and final bead states, or the
+/// first error.
 pub fn compute(
     names: &[String],
     ctx: &Context,
