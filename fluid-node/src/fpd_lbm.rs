@@ -435,8 +435,9 @@ impl FpdRun {
                  above {NOTE_MACH}: the lattice's compressibility error grows as Ma^2, and a \
                  flexible fibre folds deeper than in the incompressible limit (S2023's K = 0.33 \
                  fibre: 0.930 of its contour at Ma 0.173, about 0.958 as Ma -> 0; a rigid \
-                 fibre's period by 1.5 % between Ma 0.043 and 0.173; docs/validation/fpd.md). To check a \
-                 result, lower the wall speed and the viscosity together (same Reynolds number)",
+                 fibre's period by 1.5 % between Ma 0.043 and 0.173; \
+                 docs/validation/fpd.md). To check a result, lower the wall speed and the \
+                 viscosity together (same Reynolds number)",
                 scene.mach
             ));
         }
