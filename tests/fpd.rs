@@ -268,6 +268,7 @@ fn fpd_orbits_fall_in_s2023_regimes() {
             "analysis.metrics=[\"orbit\",\"stuck_angle_deg\"]".into(),
         ];
         let s = run_in_process(&config("fpd/flexible_shear.toml"), &o, name);
+        check_orbit_files(&run_dir(name), &s);
         let m = &s["metrics"]["orbit"];
         println!(
             "K = {k}, C = {:.3}: {} ({}), stuck angle {}",
@@ -281,6 +282,53 @@ fn fpd_orbits_fall_in_s2023_regimes() {
     assert_eq!(run("fpd-orbit-rigid", 3.3, 0), "jeffery");
     assert_eq!(run("fpd-orbit-floppy", 3.3e-5, 0), "s-coiled");
     assert_eq!(run("fpd-orbit-confined", 3.3, 1), "stuck");
+}
+
+/// `orbit.csv` and `orbit.png` (coordinator/src/orbit_report.rs) next to a summary with orbit
+/// metrics: the rows span the run (every sample, or every k-th one and the last), the
+/// end-to-end column reaches the summary's smallest end-to-end distance (exactly when no
+/// sample was left out), the direction passes through the vertical once more than the run
+/// has complete half-turns, and the plot is a PNG.
+fn check_orbit_files(dir: &std::path::Path, s: &serde_json::Value) {
+    assert_eq!(s["files"], serde_json::json!(["orbit.csv", "orbit.png"]));
+    let csv = std::fs::read_to_string(dir.join("orbit.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "time,gamma_t,theta_deg,direction_deg,omega_over_gamma,end_to_end_over_contour"
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let steps = s["steps"].as_u64().unwrap() as usize;
+    let stride = (steps + 1).div_ceil(coordinator::orbit_report::MAX_ROWS);
+    assert_eq!(rows.len(), steps.div_ceil(stride) + 1);
+    let last = &rows[rows.len() - 1];
+    let gamma = s["derived"]["fluid.shear_rate"].as_f64().unwrap().abs();
+    assert_eq!(last[0], s["time"].as_f64().unwrap());
+    assert!((last[1] - gamma * last[0]).abs() < 1e-12 * last[1].max(1.0));
+    let orbit = &s["metrics"]["orbit"]["extra"];
+    let min_e2e = rows.iter().map(|r| r[5]).fold(f64::INFINITY, f64::min);
+    let reported = orbit["min_end_to_end_over_contour"].as_f64().unwrap();
+    assert!(
+        min_e2e >= reported && min_e2e - reported < 2e-3,
+        "{min_e2e} vs {reported}"
+    );
+    if stride == 1 {
+        assert_eq!(min_e2e, reported);
+    }
+    // A pass through the vertical: the direction jumps by about 180 deg between rows.
+    let passes = rows
+        .windows(2)
+        .filter(|w| (w[1][3] - w[0][3]).abs() > 90.0)
+        .count();
+    let half_turns = orbit["half_turns"].as_f64().unwrap() as usize;
+    assert!(
+        passes == half_turns + 1 || (half_turns == 0 && passes <= 1),
+        "{passes} passes through the vertical, {half_turns} half-turns"
+    );
+    let png = std::fs::read(dir.join("orbit.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
 }
 
 /// The S-turn fibre of S2023 Fig. 7 (K = 0.33, C = 0.5, Re_ps = 1.5, d = 4) on one lattice at

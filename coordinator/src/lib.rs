@@ -8,6 +8,7 @@ pub mod links;
 pub mod mcap_log;
 pub mod metrics;
 pub mod orbit;
+pub mod orbit_report;
 mod pipeline;
 pub mod plot;
 pub mod reference;

@@ -226,9 +226,21 @@ fn print_result(summary: &serde_json::Value, out: &std::path::Path) {
             println!("  {name}: not computed: {}", why.as_str().unwrap_or(""));
         }
     }
-    println!(
-        "wrote {}/run.mcap and {}/summary.json",
-        out.display(),
-        out.display()
-    );
+    if let Some(m) = summary["file_errors"].as_object() {
+        for (name, why) in m {
+            println!(
+                "  {name} files: not written: {}",
+                why.as_str().unwrap_or("")
+            );
+        }
+    }
+    let mut files = vec!["run.mcap".to_string(), "summary.json".to_string()];
+    if let Some(extra) = summary["files"].as_array() {
+        files.extend(extra.iter().filter_map(|f| f.as_str().map(String::from)));
+    }
+    let files: Vec<String> = files
+        .iter()
+        .map(|f| format!("{}/{f}", out.display()))
+        .collect();
+    println!("wrote {}", files.join(", "));
 }

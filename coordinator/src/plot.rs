@@ -221,3 +221,185 @@ pub fn regime_map(
     root.present().map_err(e)?;
     Ok(())
 }
+
+/// Fibre 0's orbit in three panels: S2023 Fig. 5a (`omega / gamma` against the direction,
+/// with eq. 19 for the fitted aspect ratio `fit`, the geometric one `geometric` and a
+/// reference value `(r_c, source)` if given), then the direction and the end-to-end distance
+/// against `gamma t`.
+pub fn orbit(
+    path: &Path,
+    title: &str,
+    rows: &crate::orbit_report::OrbitRows,
+    fit: Option<f64>,
+    geometric: f64,
+    reference: Option<(f64, &str)>,
+) -> Result<(), String> {
+    use crate::orbit_report::jeffery_omega_over_gamma;
+    register_font();
+    if rows.is_empty() {
+        return Err("nothing to plot: the orbit has no samples".into());
+    }
+    let e = |e: DrawingAreaErrorKind<_>| format!("plotting {}: {e:?}", path.display());
+    let root = BitMapBackend::new(path, (900, 1200)).into_drawing_area();
+    root.fill(&WHITE).map_err(e)?;
+    let root = root.titled(title, ("sans-serif", 22)).map_err(e)?;
+    let panels = root.split_evenly((3, 1));
+    let finite = |v: &[f64]| {
+        v.iter()
+            .copied()
+            .filter(|x| x.is_finite())
+            .fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)))
+    };
+    let padded = |(lo, hi): (f64, f64), min_span: f64| {
+        let span = (hi - lo).max(min_span);
+        let mid = 0.5 * (lo + hi);
+        (mid - 0.55 * span, mid + 0.55 * span)
+    };
+    let grid_t = |gt: &[f64]| {
+        let (a, b) = finite(gt);
+        (a, if b > a { b } else { a + 1.0 })
+    };
+    let line = |r: f64| -> Vec<(f64, f64)> {
+        (0..=360)
+            .map(|i| {
+                let th = -90.0 + 0.5 * i as f64;
+                (th, jeffery_omega_over_gamma(r, th))
+            })
+            .collect()
+    };
+
+    // (a) omega / gamma against the direction: S2023 Fig. 5a.
+    let (w0, w1) = finite(&rows.omega_over_gamma);
+    let (w0, w1) = padded((w0.min(-1.0), w1.max(0.0)), 0.1);
+    // Room above the curves for the legend.
+    let w1 = w1 + 0.3 * (w1 - w0);
+    let mut chart = ChartBuilder::on(&panels[0])
+        .margin(15)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(-90.0..90.0, w0..w1)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("direction theta (deg, from +x)")
+        .y_desc("omega / gamma")
+        .label_style(("sans-serif", 15))
+        .y_label_formatter(&|v| format!("{v:.2}"))
+        .draw()
+        .map_err(e)?;
+    chart
+        .draw_series(
+            rows.direction_deg
+                .iter()
+                .zip(&rows.omega_over_gamma)
+                .filter(|(_, w)| w.is_finite())
+                .map(|(&t, &w)| Circle::new((t, w), 2, BLUE.filled())),
+        )
+        .map_err(e)?
+        .label("measured")
+        .legend(|(x, y)| Circle::new((x, y), 4, BLUE.filled()));
+    if let Some(r) = fit {
+        chart
+            .draw_series(LineSeries::new(line(r), RED.stroke_width(2)))
+            .map_err(e)?
+            .label(format!("S2023 eq. 19, fitted r_c = {r:.3}"))
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
+    }
+    chart
+        .draw_series(DashedLineSeries::new(
+            line(geometric),
+            6,
+            4,
+            BLACK.stroke_width(1),
+        ))
+        .map_err(e)?
+        .label(format!("S2023 eq. 19, geometric r_c = {geometric:.3}"))
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+    if let Some((r, source)) = reference {
+        let green = RGBColor(44, 160, 44);
+        chart
+            .draw_series(DashedLineSeries::new(line(r), 10, 5, green.stroke_width(2)))
+            .map_err(e)?
+            .label(format!("S2023 eq. 19, r_c = {r:.3} ({source})"))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], green.stroke_width(2))
+            });
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(e)?;
+
+    // (b) the direction against gamma t.
+    let (t0, t1) = grid_t(&rows.gamma_t);
+    let mut chart = ChartBuilder::on(&panels[1])
+        .margin(15)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(t0..t1, -90.0..90.0)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("gamma t")
+        .y_desc("direction theta (deg)")
+        .label_style(("sans-serif", 15))
+        .draw()
+        .map_err(e)?;
+    chart
+        .draw_series(
+            rows.gamma_t
+                .iter()
+                .zip(&rows.direction_deg)
+                .map(|(&t, &d)| Circle::new((t, d), 1, BLUE.filled())),
+        )
+        .map_err(e)?;
+
+    // (c) the end-to-end distance against gamma t, with the fold threshold of the orbit.
+    let (r0, r1) = finite(&rows.end_to_end);
+    let (r0, r1) = padded((r0.min(crate::orbit::FOLD_RATIO), r1.max(1.0)), 0.02);
+    let mut chart = ChartBuilder::on(&panels[2])
+        .margin(15)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(t0..t1, r0..r1)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("gamma t")
+        .y_desc("end-to-end / contour")
+        .label_style(("sans-serif", 15))
+        .y_label_formatter(&|v| format!("{v:.3}"))
+        .draw()
+        .map_err(e)?;
+    chart
+        .draw_series(LineSeries::new(
+            rows.gamma_t
+                .iter()
+                .copied()
+                .zip(rows.end_to_end.iter().copied()),
+            BLUE.stroke_width(2),
+        ))
+        .map_err(e)?;
+    let fold = crate::orbit::FOLD_RATIO;
+    chart
+        .draw_series(DashedLineSeries::new(
+            vec![(t0, fold), (t1, fold)],
+            6,
+            4,
+            RED.stroke_width(1),
+        ))
+        .map_err(e)?;
+    chart
+        .draw_series(std::iter::once(Text::new(
+            format!("fold threshold {fold}"),
+            (t0 + 0.01 * (t1 - t0), fold + 0.03 * (r1 - r0)),
+            ("sans-serif", 14).into_font().color(&RED),
+        )))
+        .map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}

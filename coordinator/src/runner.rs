@@ -398,6 +398,10 @@ struct RunState {
     metrics: BTreeMap<String, crate::metrics::Metric>,
     /// Metrics asked for that could not be computed, with the reason.
     metric_errors: BTreeMap<String, String>,
+    /// Files written next to the log and the summary (`orbit.csv`, `orbit.png`).
+    files: Vec<String>,
+    /// Files that could not be written, with the reason; the run still completes.
+    file_errors: BTreeMap<String, String>,
     dimensionless: BTreeMap<String, f64>,
     /// When this piece of the run started.
     started: Option<Instant>,
@@ -467,6 +471,8 @@ impl RunState {
             "final_diagnostics": diagnostics,
             "metrics": self.metrics,
             "metric_errors": self.metric_errors,
+            "files": self.files,
+            "file_errors": self.file_errors,
         })
     }
 }
@@ -703,6 +709,22 @@ fn drive(
     };
     (st.metrics, st.metric_errors) =
         crate::metrics::compute_each(&scene.scene.analysis.metrics, &ctx, &mut st.dimensionless);
+    // The orbit the metrics rest on, as files: needs the trajectory and a wall shear.
+    let gamma = crate::metrics::lookup(&st.configured.derived, "fluid.shear_rate").map(f64::abs);
+    if let (true, Some(gamma)) = (track, gamma) {
+        let series = trajectory.orientation_series();
+        let reference = st
+            .metrics
+            .get("effective_aspect_ratio")
+            .and_then(|m| m.reference.map(|r| (r, m.reference_source.as_str())));
+        let title = scene.name();
+        match crate::orbit_report::write(&opts.out, &series, beads[0], gamma, &title, reference) {
+            Ok(files) => st.files.extend(files),
+            Err(e) => {
+                st.file_errors.insert("orbit".into(), e);
+            }
+        }
+    }
     Ok(status)
 }
 

@@ -14,12 +14,17 @@ pub fn config(name: &str) -> PathBuf {
     root().join("configs").join(name)
 }
 
-/// A fresh output directory for one test.
-pub fn out_dir(test: &str) -> PathBuf {
-    let d = root()
+/// The output directory of one test in this test process (see [`out_dir`]).
+pub fn run_dir(test: &str) -> PathBuf {
+    root()
         .join("target")
         .join("test-runs")
-        .join(format!("{test}-{}", std::process::id()));
+        .join(format!("{test}-{}", std::process::id()))
+}
+
+/// A fresh output directory for one test.
+pub fn out_dir(test: &str) -> PathBuf {
+    let d = run_dir(test);
     let _ = std::fs::remove_dir_all(&d);
     d
 }
