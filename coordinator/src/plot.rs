@@ -403,3 +403,106 @@ pub fn orbit(
     root.present().map_err(e)?;
     Ok(())
 }
+
+/// A metric against a parameter (a study's `[curve]`): the variants as points joined in order
+/// of `x`, and the reference as a dashed line if there is one. `x` and `y` are (axis name,
+/// logarithmic).
+pub fn metric_against(
+    path: &Path,
+    title: &str,
+    x: (&str, bool),
+    y: (&str, bool),
+    points: &[(f64, f64)],
+    reference: Option<f64>,
+) -> Result<(), String> {
+    register_font();
+    let ok = |v: f64, log: bool| v.is_finite() && (!log || v > 0.0);
+    let mut pts: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|&(a, b)| ok(a, x.1) && ok(b, y.1))
+        .collect();
+    if pts.is_empty() {
+        return Err("nothing to plot: no variant reported the curve's abscissa and a value".into());
+    }
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let range = |v: &mut dyn Iterator<Item = f64>, log: bool| {
+        let (lo, hi) = v.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
+        if log {
+            (lo / 2.0, hi * 2.0)
+        } else {
+            let pad = if hi > lo {
+                0.1 * (hi - lo)
+            } else {
+                0.5 * lo.abs().max(1e-12)
+            };
+            (lo - pad, hi + pad)
+        }
+    };
+    let (x0, x1) = range(&mut pts.iter().map(|p| p.0), x.1);
+    let (y0, y1) = range(
+        &mut pts
+            .iter()
+            .map(|p| p.1)
+            .chain(reference.filter(|r| ok(*r, y.1))),
+        y.1,
+    );
+    let e = |e: DrawingAreaErrorKind<_>| format!("plotting {}: {e:?}", path.display());
+    let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(e)?;
+    let mut builder = ChartBuilder::on(&root);
+    builder
+        .caption(title, ("sans-serif", 22))
+        .margin(20)
+        .x_label_area_size(50)
+        .y_label_area_size(80);
+    macro_rules! draw {
+        ($xr:expr, $yr:expr) => {{
+            let mut chart = builder.build_cartesian_2d($xr, $yr).map_err(e)?;
+            chart
+                .configure_mesh()
+                .x_desc(x.0)
+                .y_desc(y.0)
+                .label_style(("sans-serif", 15))
+                .y_label_formatter(&|v| format!("{v:.3}"))
+                .draw()
+                .map_err(e)?;
+            chart
+                .draw_series(LineSeries::new(pts.clone(), BLUE.mix(0.5)))
+                .map_err(e)?;
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 5, BLUE.filled())))
+                .map_err(e)?
+                .label(y.0)
+                .legend(|(px, py)| Circle::new((px, py), 5, BLUE.filled()));
+            if let Some(r) = reference {
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        vec![(x0, r), (x1, r)],
+                        8,
+                        5,
+                        RED.stroke_width(2),
+                    ))
+                    .map_err(e)?
+                    .label(format!("reference {r}"))
+                    .legend(|(px, py)| PathElement::new(vec![(px, py), (px + 20, py)], RED));
+            }
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 15))
+                .draw()
+                .map_err(e)?;
+        }};
+    }
+    match (x.1, y.1) {
+        (true, true) => draw!((x0..x1).log_scale(), (y0..y1).log_scale()),
+        (true, false) => draw!((x0..x1).log_scale(), y0..y1),
+        (false, true) => draw!(x0..x1, (y0..y1).log_scale()),
+        (false, false) => draw!(x0..x1, y0..y1),
+    }
+    root.present().map_err(e)?;
+    Ok(())
+}

@@ -16,7 +16,13 @@
 //! [convergence]                            # optional: no analytic reference, a refinement
 //! key = "fibre.0.beads"                    # varied key giving the resolution (larger = finer)
 //! order = 1.0                              # assumed order of convergence (default 1)
+//! [curve]                                  # optional: the metric against a derived number
+//! x = "fluid.particle_shear_reynolds"      # a key of the summary's `derived` values
 //! ```
+//!
+//! With `[curve]` the study also draws `NAME_curve.png`, the metric against `x` with its
+//! reference, and the table gets a column for `x`: for sweeps over a physical parameter,
+//! where error against wall time says little.
 //!
 //! With `[convergence]` the reference of every variant is the Richardson extrapolation of the
 //! metric from the two finest variants, `v_f + (v_f - v_c) / ((n_f / n_c)^order - 1)`, so the
@@ -52,6 +58,21 @@ pub struct Study {
     /// A refinement study: the reference is extrapolated from the two finest variants.
     #[serde(default)]
     pub convergence: Option<Convergence>,
+    /// The metric against a number the nodes derive (a parameter sweep).
+    #[serde(default)]
+    pub curve: Option<Curve>,
+}
+
+/// `[curve]`: the abscissa of a metric-against-parameter plot, the name of a number the
+/// nodes derive and report in the summary (`derived`), like the axes of `[diagram]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Curve {
+    pub x: String,
+    #[serde(default)]
+    pub log_x: bool,
+    #[serde(default)]
+    pub log_y: bool,
 }
 
 /// `[convergence]`: which varied key measures the resolution, and the assumed order.
@@ -143,6 +164,8 @@ pub struct Row {
     pub point: Option<(f64, f64)>,
     /// The value of the `[convergence]` key in this variant.
     pub resolution: Option<f64>,
+    /// The `[curve]` abscissa, read from the summary's derived values.
+    pub curve_x: Option<f64>,
 }
 
 /// Read and run a study file (or, with `replot`, reuse its previous runs); returns the
@@ -278,6 +301,7 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, replot: bool) -> Result
                     class: None,
                     point: None,
                     resolution,
+                    curve_x: None,
                 });
                 continue;
             }
@@ -298,6 +322,15 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, replot: bool) -> Result
             .diagram
             .as_ref()
             .and_then(|d| Some((s["derived"][&d.x].as_f64()?, s["derived"][&d.y].as_f64()?)));
+        let curve_x = match &study.curve {
+            Some(c) => Some(s["derived"][&c.x].as_f64().ok_or_else(|| {
+                format!(
+                    "variant {label}: curve.x `{}` is not among the summary's derived values",
+                    c.x
+                )
+            })?),
+            None => None,
+        };
         rows.push(Row {
             label,
             value: m["value"].as_f64().unwrap_or(f64::NAN),
@@ -309,6 +342,7 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, replot: bool) -> Result
             class: m["label"].as_str().map(str::to_string),
             point,
             resolution,
+            curve_x,
         });
     }
     let mut note = String::new();
@@ -324,10 +358,11 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, replot: bool) -> Result
             c.order, c.key
         );
     }
-    let csv = render_csv(&rows);
+    let csv = render_csv(&rows, curve_name_of(study));
     std::fs::write(out.join(format!("{}.csv", study.name)), &csv).map_err(|e| e.to_string())?;
     let title = study.title.clone().unwrap_or_else(|| study.name.clone());
-    let md = render_markdown(&title, &study.metric, &rows) + &note;
+    let curve_name = study.curve.as_ref().map(|c| c.x.as_str());
+    let md = render_markdown(&title, &study.metric, &rows, curve_name) + &note;
     std::fs::write(out.join(format!("{}.md", study.name)), &md).map_err(|e| e.to_string())?;
     let points: Vec<crate::plot::CostPoint> = rows
         .iter()
@@ -346,6 +381,27 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, replot: bool) -> Result
             &title,
             &format!("relative error of {}", study.metric),
             &points,
+        )?;
+    }
+    if let Some(c) = &study.curve {
+        let points: Vec<(f64, f64)> = rows
+            .iter()
+            .filter_map(|r| Some((r.curve_x?, r.value)))
+            .filter(|(x, y)| x.is_finite() && y.is_finite())
+            .collect();
+        // One reference line when every row has the same one (an analytic or published value).
+        let refs: Vec<f64> = rows.iter().filter_map(|r| r.reference).collect();
+        let reference = refs
+            .first()
+            .copied()
+            .filter(|r0| refs.iter().all(|r| r == r0) && refs.len() == rows.len());
+        crate::plot::metric_against(
+            &out.join(format!("{}_curve.png", study.name)),
+            &title,
+            (&c.x, c.log_x),
+            (&study.metric, c.log_y),
+            &points,
+            reference,
         )?;
     }
     if let Some(d) = &study.diagram {
@@ -407,12 +463,17 @@ fn fmt_opt(v: Option<f64>) -> String {
     v.map_or(String::new(), |v| format!("{v:.6}"))
 }
 
-pub fn render_csv(rows: &[Row]) -> String {
-    let mut s = String::from(
-        "variant,value,reference,relative_error,wall_seconds,steps,status,class,x,y\n",
-    );
+fn curve_name_of(study: &Study) -> Option<&str> {
+    study.curve.as_ref().map(|c| c.x.as_str())
+}
+
+/// The rows as CSV; with a `[curve]` (named `curve`) a last column `curve_x` holds its abscissa.
+pub fn render_csv(rows: &[Row], curve: Option<&str>) -> String {
+    let mut s =
+        String::from("variant,value,reference,relative_error,wall_seconds,steps,status,class,x,y");
+    s.push_str(if curve.is_some() { ",curve_x\n" } else { "\n" });
     for r in rows {
-        let _ = writeln!(
+        let _ = write!(
             s,
             "\"{}\",{},{},{},{:.4},{},{},{},{},{}",
             r.label,
@@ -426,16 +487,33 @@ pub fn render_csv(rows: &[Row]) -> String {
             r.point.map_or(String::new(), |p| p.0.to_string()),
             r.point.map_or(String::new(), |p| p.1.to_string()),
         );
+        if curve.is_some() {
+            let _ = write!(s, ",{}", r.curve_x.map_or(String::new(), |v| v.to_string()));
+        }
+        s.push('\n');
     }
     s
 }
 
-pub fn render_markdown(title: &str, metric: &str, rows: &[Row]) -> String {
-    let mut s = format!("### {title}\n\n| variant | {metric} | reference | relative error | wall time (s) | steps | status |\n|---|---|---|---|---|---|---|\n");
+/// The rows as a markdown table; with a `[curve]` (named `curve`) a column for its abscissa
+/// follows the variant.
+pub fn render_markdown(title: &str, metric: &str, rows: &[Row], curve: Option<&str>) -> String {
+    let (head, rule) = match curve {
+        Some(x) => (format!(" {x} |"), "---|"),
+        None => (String::new(), ""),
+    };
+    let mut s = format!("### {title}\n\n| variant |{head} {metric} | reference | relative error | wall time (s) | steps | status |\n|---|{rule}---|---|---|---|---|---|\n");
     for r in rows {
+        let x = match curve {
+            Some(_) => format!(
+                " {} |",
+                r.curve_x.map_or(String::new(), |v| format!("{v:.6}"))
+            ),
+            None => String::new(),
+        };
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {:.3} | {} | {} |",
+            "| {} |{x} {} | {} | {} | {:.3} | {} | {} |",
             r.label,
             match &r.class {
                 Some(c) => format!("{c} ({})", r.value),
@@ -468,7 +546,30 @@ mod tests {
             class: None,
             point: None,
             resolution: Some(n),
+            curve_x: None,
         }
+    }
+
+    /// A `[curve]` adds its abscissa as a column of the table and as the CSV's last column;
+    /// without one both keep their usual columns.
+    #[test]
+    fn a_curve_adds_its_abscissa_to_the_table_and_the_csv() {
+        let mut r = row(8.0, 0.25);
+        r.curve_x = Some(1.5);
+        let md = render_markdown("t", "m", std::slice::from_ref(&r), Some("fluid.re"));
+        assert!(
+            md.contains("| variant | fluid.re | m | reference |"),
+            "{md}"
+        );
+        assert!(md.contains("| n=8 | 1.500000 | 0.250000 |"), "{md}");
+        let csv = render_csv(std::slice::from_ref(&r), Some("fluid.re"));
+        let lines: Vec<&str> = csv.lines().collect();
+        assert!(lines[0].ends_with(",x,y,curve_x"));
+        assert!(lines[1].ends_with(",1.5"));
+        let plain = render_csv(std::slice::from_ref(&r), None);
+        assert!(plain.lines().next().unwrap().ends_with(",x,y"));
+        assert_eq!(plain.lines().nth(1).unwrap().split(',').count(), 10);
+        assert!(!render_markdown("t", "m", &[r], None).contains("fluid.re"));
     }
 
     /// v(n) = 2 + 3 n^-p sampled at three resolutions, in any order: the two finest give
