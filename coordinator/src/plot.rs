@@ -12,6 +12,69 @@ fn register_font() {
     });
 }
 
+/// Build a chart from `$builder` on linear or logarithmic axes, as `$log_x` and `$log_y`
+/// say, and run `$body` with it bound to `$chart`. Plotters' linear and logarithmic axes are
+/// different types, so the body is expanded once per combination.
+macro_rules! on_axes {
+    ($builder:expr, $e:expr, ($x0:expr, $x1:expr, $log_x:expr), ($y0:expr, $y1:expr, $log_y:expr),
+     |$chart:ident| $body:block) => {
+        match ($log_x, $log_y) {
+            (true, true) => {
+                let mut $chart = $builder
+                    .build_cartesian_2d(($x0..$x1).log_scale(), ($y0..$y1).log_scale())
+                    .map_err($e)?;
+                $body
+            }
+            (true, false) => {
+                let mut $chart = $builder
+                    .build_cartesian_2d(($x0..$x1).log_scale(), $y0..$y1)
+                    .map_err($e)?;
+                $body
+            }
+            (false, true) => {
+                let mut $chart = $builder
+                    .build_cartesian_2d($x0..$x1, ($y0..$y1).log_scale())
+                    .map_err($e)?;
+                $body
+            }
+            (false, false) => {
+                let mut $chart = $builder
+                    .build_cartesian_2d($x0..$x1, $y0..$y1)
+                    .map_err($e)?;
+                $body
+            }
+        }
+    };
+}
+
+/// Draw `$chart`'s legend in the plots' common style at `$position`.
+macro_rules! legend {
+    ($chart:expr, $e:expr, $position:expr) => {
+        $chart
+            .configure_series_labels()
+            .position($position)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 15))
+            .draw()
+            .map_err($e)?
+    };
+}
+
+/// The layout every single-panel plot shares: title, margins, room for the axis labels.
+fn titled_chart<'a, 'b>(
+    root: &'a DrawingArea<BitMapBackend<'b>, plotters::coord::Shift>,
+    title: &str,
+) -> ChartBuilder<'a, 'b, BitMapBackend<'b>> {
+    let mut builder = ChartBuilder::on(root);
+    builder
+        .caption(title, ("sans-serif", 22))
+        .margin(20)
+        .x_label_area_size(50)
+        .y_label_area_size(80);
+    builder
+}
+
 /// One labelled point of an error-against-cost plot.
 pub struct CostPoint {
     pub wall_seconds: f64,
@@ -49,11 +112,7 @@ pub fn error_against_time(
     let e = |e: DrawingAreaErrorKind<_>| format!("plotting {}: {e:?}", path.display());
     let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(e)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 22))
-        .margin(20)
-        .x_label_area_size(50)
-        .y_label_area_size(80)
+    let mut chart = titled_chart(&root, title)
         .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
         .map_err(e)?;
     chart
@@ -127,6 +186,22 @@ fn class_colour(class: &str, others: &mut Vec<String>) -> RGBColor {
     }
 }
 
+/// An axis range around `values` with a margin: a factor 3 on a logarithmic axis, a tenth
+/// of the span on a linear one (half the value, or 1, for a single value).
+fn axis_range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
+    let (lo, hi) = values.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
+    if log {
+        (lo / 3.0, hi * 3.0)
+    } else {
+        let pad = if hi > lo {
+            0.1 * (hi - lo)
+        } else {
+            0.5 * lo.abs().max(1.0)
+        };
+        (lo - pad, hi + pad)
+    }
+}
+
 /// A regime map: every point coloured by its class, with a legend (S2023 Fig. 10a style).
 /// `x` and `y` are (axis name, logarithmic).
 pub fn regime_map(
@@ -146,21 +221,8 @@ pub fn regime_map(
         return Err("nothing to plot: no variant reported both diagram coordinates".into());
     }
     // Axis ranges with a margin: a factor on a log axis, a fraction of the span otherwise.
-    let range = |v: &mut dyn Iterator<Item = f64>, log: bool| {
-        let (lo, hi) = v.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
-        if log {
-            (lo / 3.0, hi * 3.0)
-        } else {
-            let pad = if hi > lo {
-                0.1 * (hi - lo)
-            } else {
-                0.5 * lo.abs().max(1.0)
-            };
-            (lo - pad, hi + pad)
-        }
-    };
-    let (x0, x1) = range(&mut pts.iter().map(|p| p.x), x.1);
-    let (y0, y1) = range(&mut pts.iter().map(|p| p.y), y.1);
+    let (x0, x1) = axis_range(pts.iter().map(|p| p.x), x.1);
+    let (y0, y1) = axis_range(pts.iter().map(|p| p.y), y.1);
     let e = |e: DrawingAreaErrorKind<_>| format!("plotting {}: {e:?}", path.display());
     let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(e)?;
@@ -172,52 +234,31 @@ pub fn regime_map(
             classes.push((p.class.clone(), colour));
         }
     }
-    let mut builder = ChartBuilder::on(&root);
-    builder
-        .caption(title, ("sans-serif", 22))
-        .margin(20)
-        .x_label_area_size(50)
-        .y_label_area_size(80);
-    // Linear and logarithmic axes are different chart types: one drawing, four expansions.
-    macro_rules! draw {
-        ($xr:expr, $yr:expr) => {{
-            let mut chart = builder.build_cartesian_2d($xr, $yr).map_err(e)?;
+    let mut builder = titled_chart(&root, title);
+    on_axes!(builder, e, (x0, x1, x.1), (y0, y1, y.1), |chart| {
+        chart
+            .configure_mesh()
+            .x_desc(x.0)
+            .y_desc(y.0)
+            .label_style(("sans-serif", 15))
+            .x_label_formatter(&|v| format!("{v:.2e}"))
+            .y_label_formatter(&|v| format!("{v:.2}"))
+            .draw()
+            .map_err(e)?;
+        for (class, colour) in &classes {
+            let c = *colour;
             chart
-                .configure_mesh()
-                .x_desc(x.0)
-                .y_desc(y.0)
-                .label_style(("sans-serif", 15))
-                .x_label_formatter(&|v| format!("{v:.2e}"))
-                .y_label_formatter(&|v| format!("{v:.2}"))
-                .draw()
-                .map_err(e)?;
-            for (class, colour) in &classes {
-                let c = *colour;
-                chart
-                    .draw_series(
-                        pts.iter()
-                            .filter(|p| p.class == *class)
-                            .map(|p| Circle::new((p.x, p.y), 8, c.filled())),
-                    )
-                    .map_err(e)?
-                    .label(class.clone())
-                    .legend(move |(px, py)| Circle::new((px, py), 6, c.filled()));
-            }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 15))
-                .draw()
-                .map_err(e)?;
-        }};
-    }
-    match (x.1, y.1) {
-        (true, true) => draw!((x0..x1).log_scale(), (y0..y1).log_scale()),
-        (true, false) => draw!((x0..x1).log_scale(), y0..y1),
-        (false, true) => draw!(x0..x1, (y0..y1).log_scale()),
-        (false, false) => draw!(x0..x1, y0..y1),
-    }
+                .draw_series(
+                    pts.iter()
+                        .filter(|p| p.class == *class)
+                        .map(|p| Circle::new((p.x, p.y), 8, c.filled())),
+                )
+                .map_err(e)?
+                .label(class.clone())
+                .legend(move |(px, py)| Circle::new((px, py), 6, c.filled()));
+        }
+        legend!(chart, e, SeriesLabelPosition::MiddleRight);
+    });
     root.present().map_err(e)?;
     Ok(())
 }
@@ -325,14 +366,7 @@ pub fn orbit(
                 PathElement::new(vec![(x, y), (x + 20, y)], green.stroke_width(2))
             });
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 14))
-        .draw()
-        .map_err(e)?;
+    legend!(chart, e, SeriesLabelPosition::UpperLeft);
 
     // (b) the direction against gamma t.
     let (t0, t1) = grid_t(&rows.gamma_t);
@@ -426,23 +460,9 @@ pub fn metric_against(
         return Err("nothing to plot: no variant reported the curve's abscissa and a value".into());
     }
     pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let range = |v: &mut dyn Iterator<Item = f64>, log: bool| {
-        let (lo, hi) = v.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
-        if log {
-            (lo / 2.0, hi * 2.0)
-        } else {
-            let pad = if hi > lo {
-                0.1 * (hi - lo)
-            } else {
-                0.5 * lo.abs().max(1e-12)
-            };
-            (lo - pad, hi + pad)
-        }
-    };
-    let (x0, x1) = range(&mut pts.iter().map(|p| p.0), x.1);
-    let (y0, y1) = range(
-        &mut pts
-            .iter()
+    let (x0, x1) = axis_range(pts.iter().map(|p| p.0), x.1);
+    let (y0, y1) = axis_range(
+        pts.iter()
             .map(|p| p.1)
             .chain(reference.filter(|r| ok(*r, y.1))),
         y.1,
@@ -450,59 +470,38 @@ pub fn metric_against(
     let e = |e: DrawingAreaErrorKind<_>| format!("plotting {}: {e:?}", path.display());
     let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(e)?;
-    let mut builder = ChartBuilder::on(&root);
-    builder
-        .caption(title, ("sans-serif", 22))
-        .margin(20)
-        .x_label_area_size(50)
-        .y_label_area_size(80);
-    macro_rules! draw {
-        ($xr:expr, $yr:expr) => {{
-            let mut chart = builder.build_cartesian_2d($xr, $yr).map_err(e)?;
+    let mut builder = titled_chart(&root, title);
+    on_axes!(builder, e, (x0, x1, x.1), (y0, y1, y.1), |chart| {
+        chart
+            .configure_mesh()
+            .x_desc(x.0)
+            .y_desc(y.0)
+            .label_style(("sans-serif", 15))
+            .y_label_formatter(&|v| format!("{v:.3}"))
+            .draw()
+            .map_err(e)?;
+        chart
+            .draw_series(LineSeries::new(pts.clone(), BLUE.mix(0.5)))
+            .map_err(e)?;
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 5, BLUE.filled())))
+            .map_err(e)?
+            .label(y.0)
+            .legend(|(px, py)| Circle::new((px, py), 5, BLUE.filled()));
+        if let Some(r) = reference {
             chart
-                .configure_mesh()
-                .x_desc(x.0)
-                .y_desc(y.0)
-                .label_style(("sans-serif", 15))
-                .y_label_formatter(&|v| format!("{v:.3}"))
-                .draw()
-                .map_err(e)?;
-            chart
-                .draw_series(LineSeries::new(pts.clone(), BLUE.mix(0.5)))
-                .map_err(e)?;
-            chart
-                .draw_series(pts.iter().map(|&p| Circle::new(p, 5, BLUE.filled())))
+                .draw_series(DashedLineSeries::new(
+                    vec![(x0, r), (x1, r)],
+                    8,
+                    5,
+                    RED.stroke_width(2),
+                ))
                 .map_err(e)?
-                .label(y.0)
-                .legend(|(px, py)| Circle::new((px, py), 5, BLUE.filled()));
-            if let Some(r) = reference {
-                chart
-                    .draw_series(DashedLineSeries::new(
-                        vec![(x0, r), (x1, r)],
-                        8,
-                        5,
-                        RED.stroke_width(2),
-                    ))
-                    .map_err(e)?
-                    .label(format!("reference {r}"))
-                    .legend(|(px, py)| PathElement::new(vec![(px, py), (px + 20, py)], RED));
-            }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 15))
-                .draw()
-                .map_err(e)?;
-        }};
-    }
-    match (x.1, y.1) {
-        (true, true) => draw!((x0..x1).log_scale(), (y0..y1).log_scale()),
-        (true, false) => draw!((x0..x1).log_scale(), y0..y1),
-        (false, true) => draw!(x0..x1, (y0..y1).log_scale()),
-        (false, false) => draw!(x0..x1, y0..y1),
-    }
+                .label(format!("reference {r}"))
+                .legend(|(px, py)| PathElement::new(vec![(px, py), (px + 20, py)], RED));
+        }
+        legend!(chart, e, SeriesLabelPosition::UpperRight);
+    });
     root.present().map_err(e)?;
     Ok(())
 }
