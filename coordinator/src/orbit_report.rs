@@ -6,7 +6,8 @@
 //!   the shear rate, and the end-to-end distance over the contour length;
 //! - `orbit.png`: S2023 Fig. 5a (the angular velocity against the direction, with eq. 19 for
 //!   the fitted and the geometric aspect ratio) above the direction and the end-to-end
-//!   distance against `gamma t`.
+//!   distance against `gamma t`, and snapshots of the fibre's shape along `gamma t` (S2023
+//!   Fig. 7a).
 //!
 //! Angles follow [`crate::orbit`]: from +x, counter-clockwise positive, so the shear turns
 //! the fibre towards negative angles and `omega / gamma` is negative.
@@ -98,11 +99,13 @@ pub fn jeffery_omega_over_gamma(aspect_ratio: f64, theta_deg: f64) -> f64 {
 }
 
 /// Write `orbit.csv` and `orbit.png` into `dir` for fibre 0 of `beads` beads in a shear of
-/// rate `gamma`; `title` heads the plot, `reference` (`r_c` and where it comes from) is drawn
-/// next to the fit. Returns the names of the files written.
+/// rate `gamma`, with snapshots of its shape (time, bead centres) drawn along `gamma t`;
+/// `title` heads the plot, `reference` (`r_c` and where it comes from) is drawn next to the
+/// fit. Returns the names of the files written.
 pub fn write(
     dir: &Path,
     series: &OrientationSeries,
+    shapes: &[(f64, Vec<[f64; 2]>)],
     beads: usize,
     gamma: f64,
     title: &str,
@@ -126,10 +129,13 @@ pub fn write(
         .and_then(|a| a.jeffery_fit)
         .map(|f| f.effective_aspect_ratio);
     let png = dir.join("orbit.png");
+    let shapes: Vec<(f64, Vec<[f64; 2]>)> =
+        shapes.iter().map(|(t, c)| (gamma * t, c.clone())).collect();
     crate::plot::orbit(
         &png,
         title,
         &rows,
+        &shapes,
         fit,
         1.0 / beads.max(1) as f64,
         reference,

@@ -263,14 +263,16 @@ pub fn regime_map(
     Ok(())
 }
 
-/// Fibre 0's orbit in three panels: S2023 Fig. 5a (`omega / gamma` against the direction,
+/// Fibre 0's orbit in four panels: S2023 Fig. 5a (`omega / gamma` against the direction,
 /// with eq. 19 for the fitted aspect ratio `fit`, the geometric one `geometric` and a
-/// reference value `(r_c, source)` if given), then the direction and the end-to-end distance
-/// against `gamma t`.
+/// reference value `(r_c, source)` if given); the direction and the end-to-end distance
+/// against `gamma t`; and the fibre's `shapes` (`gamma t`, bead centres) drawn to scale at
+/// their `gamma t`, first bead marked (S2023 Fig. 7a).
 pub fn orbit(
     path: &Path,
     title: &str,
     rows: &crate::orbit_report::OrbitRows,
+    shapes: &[(f64, Vec<[f64; 2]>)],
     fit: Option<f64>,
     geometric: f64,
     reference: Option<(f64, &str)>,
@@ -281,10 +283,15 @@ pub fn orbit(
         return Err("nothing to plot: the orbit has no samples".into());
     }
     let e = |e: DrawingAreaErrorKind<_>| format!("plotting {}: {e:?}", path.display());
-    let root = BitMapBackend::new(path, (900, 1200)).into_drawing_area();
+    let root = BitMapBackend::new(path, (900, 1450)).into_drawing_area();
     root.fill(&WHITE).map_err(e)?;
     let root = root.titled(title, ("sans-serif", 22)).map_err(e)?;
-    let panels = root.split_evenly((3, 1));
+    // Three panels of curves, then a lower one for the shapes.
+    let h = root.dim_in_pixel().1 as f64;
+    let panels = root.split_by_breakpoints(
+        [] as [i32; 0],
+        [0.27, 0.54, 0.81].map(|f| (f * h).round() as i32),
+    );
     let finite = |v: &[f64]| {
         v.iter()
             .copied()
@@ -434,6 +441,62 @@ pub fn orbit(
             ("sans-serif", 14).into_font().color(&RED),
         )))
         .map_err(e)?;
+
+    // (d) the shapes, each centred on its gamma t, to one scale on both axes.
+    if !shapes.is_empty() {
+        let contour = |c: &[[f64; 2]]| -> f64 {
+            c.windows(2)
+                .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+                .sum()
+        };
+        let longest = shapes
+            .iter()
+            .map(|(_, c)| contour(c))
+            .fold(0.0, f64::max)
+            .max(1e-12);
+        let spacing = (t1 - t0) / shapes.len().max(2).saturating_sub(1) as f64;
+        let scale = 0.85 * spacing / longest;
+        let (x0, x1) = (t0 - 0.5 * spacing, t1 + 0.5 * spacing);
+        // The plotting area's size in pixels: the panel less margins and label areas.
+        let (w, h) = panels[3].dim_in_pixel();
+        let (pw, ph) = ((w as f64 - 100.0).max(1.0), (h as f64 - 70.0).max(1.0));
+        let half = 0.5 * (x1 - x0) * ph / pw;
+        let mut chart = ChartBuilder::on(&panels[3])
+            .margin(15)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(x0..x1, -half..half)
+            .map_err(e)?;
+        chart
+            .configure_mesh()
+            .disable_y_mesh()
+            .x_desc("gamma t (shapes to scale, first bead marked)")
+            .y_desc("fibre shape")
+            .y_labels(0)
+            .label_style(("sans-serif", 15))
+            .draw()
+            .map_err(e)?;
+        for (gt, centres) in shapes {
+            let n = centres.len().max(1) as f64;
+            let cx = centres.iter().map(|p| p[0]).sum::<f64>() / n;
+            let cy = centres.iter().map(|p| p[1]).sum::<f64>() / n;
+            let pts: Vec<(f64, f64)> = centres
+                .iter()
+                .map(|p| (gt + scale * (p[0] - cx), scale * (p[1] - cy)))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(pts.clone(), BLUE.stroke_width(2)))
+                .map_err(e)?;
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 2, BLUE.filled())))
+                .map_err(e)?;
+            if let Some(&first) = pts.first() {
+                chart
+                    .draw_series(std::iter::once(Circle::new(first, 4, RED.filled())))
+                    .map_err(e)?;
+            }
+        }
+    }
     root.present().map_err(e)?;
     Ok(())
 }

@@ -568,7 +568,9 @@ fn drive(
     };
     if track && resumed.is_none() {
         trajectory.push(0.0, &states, beads[0]);
+        trajectory.push_shape(0.0, &states, beads[0]);
     }
+    let shape_every = (steps / crate::trajectory::SHAPE_SNAPSHOTS).max(1);
 
     let interval = scene.output_interval();
     let load_scale = largest_load(scene);
@@ -648,6 +650,9 @@ fn drive(
                 .read_states_of_step(Port::BeadStates, step + 1, &mut states)
                 .map_err(|e| fail(format!("reading bead states at step {}: {e}", step + 1)))?;
             trajectory.push(st.time, &states, beads[0]);
+            if (step + 1) % shape_every == 0 {
+                trajectory.push_shape(st.time, &states, beads[0]);
+            }
         }
         if (step + 1) % interval == 0 || step + 1 == steps || at_rest || stop {
             if has_beads {
@@ -718,7 +723,10 @@ fn drive(
             .get("effective_aspect_ratio")
             .and_then(|m| m.reference.map(|r| (r, m.reference_source.as_str())));
         let title = scene.name();
-        match crate::orbit_report::write(&opts.out, &series, beads[0], gamma, &title, reference) {
+        let shapes = &trajectory.shapes;
+        match crate::orbit_report::write(
+            &opts.out, &series, shapes, beads[0], gamma, &title, reference,
+        ) {
             Ok(files) => st.files.extend(files),
             Err(e) => {
                 st.file_errors.insert("orbit".into(), e);

@@ -8,7 +8,14 @@ pub struct Trajectory {
     pub end_to_end: Vec<f64>,
     /// Contour length: the polyline through fibre 0's bead centres.
     pub contour: Vec<f64>,
+    /// A few snapshots of fibre 0's shape: time and bead centres in the x-y plane, for the
+    /// orbit plot (`orbit_report`). Absent from checkpoints written before they were kept.
+    #[serde(default)]
+    pub shapes: Vec<(f64, Vec<[f64; 2]>)>,
 }
+
+/// Shape snapshots the orbit plot shows over a run.
+pub const SHAPE_SNAPSHOTS: u64 = 12;
 
 impl Trajectory {
     /// Record fibre 0 (its first `beads` states) at `time`.
@@ -36,6 +43,17 @@ impl Trajectory {
             })
             .sum();
         self.contour.push(contour);
+    }
+
+    /// Keep fibre 0's shape (its first `beads` states) at `time`.
+    pub fn push_shape(&mut self, time: f64, states: &[cosim::BeadState], beads: usize) {
+        if states.len() >= beads {
+            let centres = states[..beads]
+                .iter()
+                .map(|s| [s.position[0], s.position[1]])
+                .collect();
+            self.shapes.push((time, centres));
+        }
     }
 
     /// The history in the orbit analysis' terms: the unwrapped angle, and the end-to-end
