@@ -329,6 +329,9 @@ fn check_orbit_files(dir: &std::path::Path, s: &serde_json::Value) {
     );
     let png = std::fs::read(dir.join("orbit.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    // IHDR: width and height, big-endian, of the four-panel figure.
+    let dim = |at: usize| u32::from_be_bytes(png[at..at + 4].try_into().unwrap());
+    assert_eq!((dim(16), dim(20)), (900, 1450));
 }
 
 /// The S-turn fibre of S2023 Fig. 7 (K = 0.33, C = 0.5, Re_ps = 1.5, d = 4) on one lattice at
