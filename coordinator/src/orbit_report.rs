@@ -16,6 +16,17 @@ use crate::orbit::{angular_velocity, direction_deg, OrientationSeries};
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// The files [`write`] writes.
+pub const FILES: [&str; 2] = ["orbit.csv", "orbit.png"];
+
+/// Remove orbit files an earlier run left in `dir`, so that a run that writes none does not
+/// leave another scene's orbit next to its own summary.
+pub fn remove_stale(dir: &Path) {
+    for f in FILES {
+        let _ = std::fs::remove_file(dir.join(f));
+    }
+}
+
 /// Most rows `orbit.csv` holds: longer runs keep every k-th sample (the angular velocity is
 /// taken from all samples first).
 pub const MAX_ROWS: usize = 20_000;
@@ -121,14 +132,14 @@ pub fn write(
         return Err(format!("the orbit files need at least 3 samples, got {n}"));
     }
     let rows = OrbitRows::new(series, gamma, n.div_ceil(MAX_ROWS));
-    let csv = dir.join("orbit.csv");
+    let csv = dir.join(FILES[0]);
     std::fs::write(&csv, rows.csv()).map_err(|e| format!("cannot write {}: {e}", csv.display()))?;
     // The fit is that of the metric `effective_aspect_ratio` (all samples, not the thinned rows).
     let fit = crate::orbit::analyse_series(series, beads, gamma)
         .ok()
         .and_then(|a| a.jeffery_fit)
         .map(|f| f.effective_aspect_ratio);
-    let png = dir.join("orbit.png");
+    let png = dir.join(FILES[1]);
     let shapes: Vec<(f64, Vec<[f64; 2]>)> =
         shapes.iter().map(|(t, c)| (gamma * t, c.clone())).collect();
     crate::plot::orbit(
@@ -140,7 +151,7 @@ pub fn write(
         1.0 / beads.max(1) as f64,
         reference,
     )?;
-    Ok(vec!["orbit.csv".into(), "orbit.png".into()])
+    Ok(FILES.map(String::from).to_vec())
 }
 
 #[cfg(test)]
@@ -181,6 +192,20 @@ mod tests {
         assert!(worst < 2e-5, "largest error in omega / gamma: {worst:e}");
         assert!((rows.gamma_t[n - 1] - PI * (r + 1.0 / r)).abs() < 1e-12);
         assert!(rows.direction_deg.iter().all(|d| *d > -90.0 && *d <= 90.0));
+    }
+
+    #[test]
+    fn stale_orbit_files_are_removed_and_nothing_else() {
+        let dir = std::env::temp_dir().join(format!("orbit-stale-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for f in FILES.iter().chain(&["summary.json"]) {
+            std::fs::write(dir.join(f), "x").unwrap();
+        }
+        remove_stale(&dir);
+        assert!(FILES.iter().all(|f| !dir.join(f).exists()));
+        assert!(dir.join("summary.json").exists());
+        remove_stale(&dir); // nothing left to remove: no error
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -324,6 +324,7 @@ pub fn run(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError
 fn run_on_this_thread(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError> {
     INTERRUPTED.store(false, Ordering::SeqCst);
     writable_dir(&opts.out)?;
+    crate::orbit_report::remove_stale(&opts.out);
     let plan = schedule::plan(scene).map_err(fail)?;
     let mcap_path = opts.out.join("run.mcap");
     let mut log = RunLog::create(&mcap_path).map_err(fail)?;
