@@ -77,6 +77,10 @@ enum Cmd {
         /// runs/study/NAME/, without running anything.
         #[arg(long)]
         replot: bool,
+        /// Run this many variants at once, each as its own `coordinator run` (same results;
+        /// the wall times then include the runs' contention, so keep 1 for cost plots).
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+        jobs: u16,
     },
 }
 
@@ -187,9 +191,25 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             }
             Ok(())
         }
-        Cmd::Study { study, out, replot } => {
+        Cmd::Study {
+            study,
+            out,
+            replot,
+            jobs,
+        } => {
+            let exe = std::env::current_exe()
+                .map_err(|e| format!("cannot find this executable for --jobs: {e}"))?;
+            let runs = match (replot, jobs) {
+                (true, 1) => study::Runs::Reuse,
+                (true, _) => return Err("--replot runs nothing: leave out --jobs".into()),
+                (false, 1) => study::Runs::OneByOne,
+                (false, j) => study::Runs::Parallel {
+                    exe: &exe,
+                    jobs: j as usize,
+                },
+            };
             let report =
-                study::run_file(&study, out.as_deref(), replot).map_err(|e| e.to_string())?;
+                study::run_file(&study, out.as_deref(), runs).map_err(|e| e.to_string())?;
             println!("{report}");
             Ok(())
         }

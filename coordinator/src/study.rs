@@ -29,7 +29,8 @@
 //! table and the plot show each variant's distance from the estimated converged value.
 //!
 //! `coordinator study FILE --replot` rebuilds the table and plots from the runs a previous
-//! `study` left in `runs/study/<name>/<variant>/summary.json`, without running anything.
+//! `study` left in `runs/study/<name>/<variant>/summary.json`, without running anything;
+//! `--jobs N` runs N variants at once as separate `coordinator run` processes ([`Runs`]).
 use crate::runner::{self, RunOptions};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -170,7 +171,7 @@ pub struct Row {
 
 /// Read and run a study file (or, with `replot`, reuse its previous runs); returns the
 /// markdown table.
-pub fn run_file(path: &Path, out: Option<&Path>, replot: bool) -> Result<String, String> {
+pub fn run_file(path: &Path, out: Option<&Path>, runs: Runs) -> Result<String, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read study file {}: {e}", path.display()))?;
     let study: Study =
@@ -193,16 +194,124 @@ pub fn run_file(path: &Path, out: Option<&Path>, replot: bool) -> Result<String,
     let out_dir = out
         .map(Path::to_path_buf)
         .unwrap_or_else(|| base.join(&study.output));
-    run(&study, &base.join(&study.scene), &out_dir, replot)
+    run(&study, &base.join(&study.scene), &out_dir, runs)
+}
+
+/// How a study gets the runs of its variants.
+#[derive(Debug, Clone, Copy)]
+pub enum Runs<'a> {
+    /// One variant after another, in this process: wall times free of contention.
+    OneByOne,
+    /// The runs an earlier study of the same file left in `runs/study/<name>/` (`--replot`).
+    Reuse,
+    /// `jobs` variants at once, each a `coordinator run` of the executable `exe`, its output
+    /// in `runs/study/<name>/<variant>/run.log`. Results are the same bits; the wall times
+    /// then include the contention between the runs.
+    Parallel { exe: &'a Path, jobs: usize },
+}
+
+/// One variant of a study, ready to run.
+struct Variant {
+    label: String,
+    overrides: Vec<String>,
+    scene: crate::scene::LoadedScene,
+    run_dir: PathBuf,
+    resolution: Option<f64>,
+}
+
+/// Run the variants as `coordinator run` processes of `exe`, `jobs` at a time; each one's
+/// standard output and error go to `run.log` in its run directory.
+fn run_in_parallel(
+    study: &Study,
+    scene_path: &Path,
+    variants: &[Variant],
+    exe: &Path,
+    jobs: usize,
+) -> Result<(), String> {
+    let mut running: Vec<(usize, std::process::Child)> = Vec::new();
+    let mut next = 0;
+    while next < variants.len() || !running.is_empty() {
+        while running.len() < jobs.max(1) && next < variants.len() {
+            let v = &variants[next];
+            std::fs::create_dir_all(&v.run_dir)
+                .map_err(|e| format!("cannot create {}: {e}", v.run_dir.display()))?;
+            let log = std::fs::File::create(v.run_dir.join("run.log"))
+                .map_err(|e| format!("cannot write {}: {e}", v.run_dir.display()))?;
+            let mut c = std::process::Command::new(exe);
+            c.arg("run")
+                .arg(scene_path)
+                .arg("--quiet")
+                .arg("--out")
+                .arg(&v.run_dir);
+            if !study.processes {
+                c.arg("--in-process");
+            }
+            for o in &v.overrides {
+                c.arg("--set").arg(o);
+            }
+            let err = log.try_clone().map_err(|e| e.to_string())?;
+            let child = c
+                .stdout(log)
+                .stderr(err)
+                .spawn()
+                .map_err(|e| format!("cannot start {}: {e}", exe.display()))?;
+            eprintln!(
+                "study {}: variant {}/{} started: {}",
+                study.name,
+                next + 1,
+                variants.len(),
+                v.label
+            );
+            running.push((next, child));
+            next += 1;
+        }
+        // Reap whatever has finished; the rest keep running.
+        let mut i = 0;
+        let mut reaped = false;
+        while i < running.len() {
+            match running[i].1.try_wait() {
+                Ok(Some(status)) => {
+                    let (k, _) = running.swap_remove(i);
+                    eprintln!(
+                        "study {}: variant {}/{} done ({status}): {}",
+                        study.name,
+                        k + 1,
+                        variants.len(),
+                        variants[k].label
+                    );
+                    reaped = true;
+                }
+                Ok(None) => i += 1,
+                Err(e) => return Err(format!("waiting for a study run: {e}")),
+            }
+        }
+        if !reaped {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+    }
+    Ok(())
+}
+
+/// The last non-empty line of a run's log, to say why a parallel run left no summary.
+fn last_log_line(run_dir: &Path) -> String {
+    std::fs::read_to_string(run_dir.join("run.log"))
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .rev()
+                .find(|l| !l.trim().is_empty())
+                .map(str::to_string)
+        })
+        .unwrap_or_default()
 }
 
 fn toml_inline(v: &toml::Value) -> String {
     v.to_string()
 }
 
-/// Run every variant of `study` on `scene_path` (or read the summaries of an earlier run of
-/// it, `replot`); write `<name>.csv`, `.md`, `.png` to `out`.
-pub fn run(study: &Study, scene_path: &Path, out: &Path, replot: bool) -> Result<String, String> {
+/// Run every variant of `study` on `scene_path` as `runs` says (or read the summaries of an
+/// earlier run of it); write `<name>.csv`, `.md`, `.png` to `out`.
+pub fn run(study: &Study, scene_path: &Path, out: &Path, runs: Runs) -> Result<String, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let mut variants: Vec<Vec<(String, toml::Value)>> = vec![Vec::new()];
     for (i, v) in study.vary.iter().enumerate() {
@@ -223,7 +332,7 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, replot: bool) -> Result
         .iter()
         .map(|(k, v)| format!("{k}={}", toml_inline(v)))
         .collect();
-    let mut rows = Vec::new();
+    let mut prepared = Vec::with_capacity(variants.len());
     for (i, assignment) in variants.iter().enumerate() {
         let mut overrides = fixed.clone();
         overrides.extend(
@@ -270,19 +379,55 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, replot: bool) -> Result
             ),
             None => None,
         };
-        eprintln!(
-            "study {}: variant {}/{}: {label}",
-            study.name,
-            i + 1,
-            variants.len()
-        );
-        let outcome = if replot {
-            read_summary(&run_dir.join("summary.json")).map_err(|e| runner::RunError {
-                message: format!("--replot: {e}"),
-            })
-        } else {
-            let opts = RunOptions::quiet(run_dir, !study.processes);
-            runner::run(&scene, &opts).map(|r| r.summary)
+        prepared.push(Variant {
+            label,
+            overrides,
+            scene,
+            run_dir,
+            resolution,
+        });
+    }
+    if let Runs::Parallel { exe, jobs } = runs {
+        run_in_parallel(study, scene_path, &prepared, exe, jobs)?;
+    }
+    let mut rows = Vec::new();
+    for (i, v) in prepared.into_iter().enumerate() {
+        let Variant {
+            label,
+            scene,
+            run_dir,
+            resolution,
+            ..
+        } = v;
+        let outcome = match runs {
+            Runs::OneByOne => {
+                eprintln!(
+                    "study {}: variant {}/{}: {label}",
+                    study.name,
+                    i + 1,
+                    variants.len()
+                );
+                let opts = RunOptions::quiet(run_dir, !study.processes);
+                runner::run(&scene, &opts).map(|r| r.summary)
+            }
+            Runs::Reuse => {
+                read_summary(&run_dir.join("summary.json")).map_err(|e| runner::RunError {
+                    message: format!("--replot: {e}"),
+                })
+            }
+            Runs::Parallel { .. } => {
+                // A run that failed still writes its summary (status `failed`, the error).
+                read_summary(&run_dir.join("summary.json"))
+                    .map_err(|e| runner::RunError {
+                        message: format!("{e}; its log ends: {}", last_log_line(&run_dir)),
+                    })
+                    .and_then(|s| match s["status"].as_str() {
+                        Some("failed") => Err(runner::RunError {
+                            message: s["error"].as_str().unwrap_or("failed").to_string(),
+                        }),
+                        _ => Ok(s),
+                    })
+            }
         };
         let summary = match outcome {
             Ok(r) => r,
