@@ -235,6 +235,8 @@ fn run_in_parallel(
             let v = &variants[next];
             std::fs::create_dir_all(&v.run_dir)
                 .map_err(|e| format!("cannot create {}: {e}", v.run_dir.display()))?;
+            // A summary left by an earlier study must not pass for this run's.
+            let _ = std::fs::remove_file(v.run_dir.join("summary.json"));
             let log = std::fs::File::create(v.run_dir.join("run.log"))
                 .map_err(|e| format!("cannot write {}: {e}", v.run_dir.display()))?;
             let mut c = std::process::Command::new(exe);
