@@ -61,6 +61,24 @@ macro_rules! legend {
     };
 }
 
+/// Margin and label areas of an orbit-plot panel (pixels).
+const PANEL_MARGIN: u32 = 15;
+const PANEL_X_LABELS: u32 = 40;
+const PANEL_Y_LABELS: u32 = 70;
+
+/// A panel of the orbit plot: margins and room for the axis labels, the same in every panel
+/// so that their gamma t axes line up.
+fn panel<'a, 'b>(
+    area: &'a DrawingArea<BitMapBackend<'b>, plotters::coord::Shift>,
+) -> ChartBuilder<'a, 'b, BitMapBackend<'b>> {
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .margin(PANEL_MARGIN)
+        .x_label_area_size(PANEL_X_LABELS)
+        .y_label_area_size(PANEL_Y_LABELS);
+    builder
+}
+
 /// The layout every single-panel plot shares: title, margins, room for the axis labels.
 fn titled_chart<'a, 'b>(
     root: &'a DrawingArea<BitMapBackend<'b>, plotters::coord::Shift>,
@@ -321,10 +339,7 @@ pub fn orbit(
     let (w0, w1) = padded((w0.min(-1.0), w1.max(0.0)), 0.1);
     // Room above the curves for the legend.
     let w1 = w1 + 0.3 * (w1 - w0);
-    let mut chart = ChartBuilder::on(&panels[0])
-        .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
+    let mut chart = panel(&panels[0])
         .build_cartesian_2d(-90.0..90.0, w0..w1)
         .map_err(e)?;
     chart
@@ -377,10 +392,7 @@ pub fn orbit(
 
     // (b) the direction against gamma t.
     let (t0, t1) = grid_t(&rows.gamma_t);
-    let mut chart = ChartBuilder::on(&panels[1])
-        .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
+    let mut chart = panel(&panels[1])
         .build_cartesian_2d(t0..t1, -90.0..90.0)
         .map_err(e)?;
     chart
@@ -402,10 +414,7 @@ pub fn orbit(
     // (c) the end-to-end distance against gamma t, with the fold threshold of the orbit.
     let (r0, r1) = finite(&rows.end_to_end);
     let (r0, r1) = padded((r0.min(crate::orbit::FOLD_RATIO), r1.max(1.0)), 0.02);
-    let mut chart = ChartBuilder::on(&panels[2])
-        .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
+    let mut chart = panel(&panels[2])
         .build_cartesian_2d(t0..t1, r0..r1)
         .map_err(e)?;
     chart
@@ -459,12 +468,12 @@ pub fn orbit(
         let (x0, x1) = (t0 - 0.5 * spacing, t1 + 0.5 * spacing);
         // The plotting area's size in pixels: the panel less margins and label areas.
         let (w, h) = panels[3].dim_in_pixel();
-        let (pw, ph) = ((w as f64 - 100.0).max(1.0), (h as f64 - 70.0).max(1.0));
+        let (pw, ph) = (
+            w.saturating_sub(2 * PANEL_MARGIN + PANEL_Y_LABELS).max(1) as f64,
+            h.saturating_sub(2 * PANEL_MARGIN + PANEL_X_LABELS).max(1) as f64,
+        );
         let half = 0.5 * (x1 - x0) * ph / pw;
-        let mut chart = ChartBuilder::on(&panels[3])
-            .margin(15)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
+        let mut chart = panel(&panels[3])
             .build_cartesian_2d(x0..x1, -half..half)
             .map_err(e)?;
         chart
