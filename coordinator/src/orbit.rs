@@ -192,7 +192,37 @@ pub struct OrbitAnalysis {
     pub reason: String,
 }
 
+/// Mean of directions (degrees, modulo 180): the angle of the mean of the doubled-angle unit
+/// vectors, halved, so that -89 and +89 deg average to 90, not 0. `None` without any.
+fn mean_direction_deg(angles: impl Iterator<Item = f64>) -> Option<f64> {
+    let (mut s, mut c, mut n) = (0.0, 0.0, 0usize);
+    for a in angles {
+        let t = 2.0 * a.to_radians();
+        s += t.sin();
+        c += t.cos();
+        n += 1;
+    }
+    (n > 0).then(|| direction_deg(0.5 * s.atan2(c)))
+}
+
 impl OrbitAnalysis {
+    /// Mean direction (degrees) at which the end-to-end distance is smallest, over the
+    /// half-turns in which the fibre folded (below [`FOLD_RATIO`]); `None` if it never did.
+    pub fn fold_angle_deg(&self) -> Option<f64> {
+        mean_direction_deg(
+            self.half_turns
+                .iter()
+                .filter(|h| h.min_ratio < FOLD_RATIO)
+                .map(|h| h.angle_at_min_deg),
+        )
+    }
+
+    /// Mean direction (degrees) at which a folded fibre was straightened again, over the
+    /// half-turns in which that happened (S2023 section IV C: near 45 deg in an S-turn).
+    pub fn straightened_at_deg(&self) -> Option<f64> {
+        mean_direction_deg(self.half_turns.iter().filter_map(|h| h.straightened_at_deg))
+    }
+
     /// Named scalars for a summary (`effective_aspect_ratio`, `stuck_angle_deg`, ...).
     pub fn scalars(&self) -> Vec<(&'static str, f64)> {
         let mut out = vec![
@@ -206,6 +236,8 @@ impl OrbitAnalysis {
             ("half_turn_period_gamma", self.period_gamma),
             ("period_aspect_ratio", self.period_aspect_ratio),
             ("stuck_angle_deg", self.stuck_angle_deg),
+            ("fold_angle_deg", self.fold_angle_deg()),
+            ("straightened_at_deg", self.straightened_at_deg()),
             (
                 "effective_aspect_ratio",
                 self.jeffery_fit.as_ref().map(|f| f.effective_aspect_ratio),

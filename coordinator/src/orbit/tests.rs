@@ -220,6 +220,14 @@ fn s_that_opens_at_45_degrees_is_an_s_turn() {
         let at = h.straightened_at_deg.unwrap();
         assert!(at > 45.0 && at < 60.0, "straightened at {at}");
     }
+    // The summary's means: folded deepest at the vertical (either side of 90 deg averages to
+    // 90, not 0), straightened between 45 and 60 deg.
+    let fold = a.fold_angle_deg().unwrap();
+    assert!((fold.abs() - 90.0).abs() < 2.0, "fold angle {fold}");
+    let at = a.straightened_at_deg().unwrap();
+    assert!(at > 45.0 && at < 60.0, "straightened at {at}");
+    let names: Vec<&str> = a.scalars().iter().map(|(k, _)| *k).collect();
+    assert!(names.contains(&"fold_angle_deg") && names.contains(&"straightened_at_deg"));
 }
 
 /// Folds within the first quarter turn and keeps an S (end-to-end 0.55 +- 0.05 of the
