@@ -505,10 +505,10 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, runs: Runs) -> Result<S
             c.order, c.key
         );
     }
-    let csv = render_csv(&rows, curve_name_of(study));
+    let curve_name = study.curve.as_ref().map(|c| c.x.as_str());
+    let csv = render_csv(&rows, curve_name);
     std::fs::write(out.join(format!("{}.csv", study.name)), &csv).map_err(|e| e.to_string())?;
     let title = study.title.clone().unwrap_or_else(|| study.name.clone());
-    let curve_name = study.curve.as_ref().map(|c| c.x.as_str());
     let md = render_markdown(&title, &study.metric, &rows, curve_name) + &note;
     std::fs::write(out.join(format!("{}.md", study.name)), &md).map_err(|e| e.to_string())?;
     let points: Vec<crate::plot::CostPoint> = rows
@@ -608,10 +608,6 @@ pub fn extrapolate(rows: &[Row], order: f64) -> Result<f64, String> {
 
 fn fmt_opt(v: Option<f64>) -> String {
     v.map_or(String::new(), |v| format!("{v:.6}"))
-}
-
-fn curve_name_of(study: &Study) -> Option<&str> {
-    study.curve.as_ref().map(|c| c.x.as_str())
 }
 
 /// The rows as CSV; with a `[curve]` (named `curve`) a last column `curve_x` holds its abscissa.
