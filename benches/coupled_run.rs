@@ -1,0 +1,220 @@
+//! Wall time of one whole coupled run, in-process against three processes (coordinator,
+//! fibre node, fluid node, coupled through iceoryx2): what the process layout costs.
+//!
+//! Each sample is one `coordinator run SCENE --quiet` from start to exit, timed from outside,
+//! so the two node processes' start-up is in it. The scenes:
+//! - `spm_2d_256x200_18_beads`: `configs/spm/coupled_2d.toml`, 1000 steps (the size of the
+//!   `spm_step` bench, ~1.3 ms a step);
+//! - `capillary_2d_256x200_18_beads`: `configs/capillary/encapsulation_2d.toml` at Ec = 40
+//!   (as in docs/performance.md), 500 steps: the same grid and fibre with the binary fluid
+//!   of L2020 (~2.7 ms a step);
+//! - `spm_3d_128x120x120_10_beads`: `configs/spm/coupled_3d.toml`, 20 steps (~90 ms a step);
+//! - `fpd_jeffery_rigid_100x200`: `configs/fpd/jeffery_rigid.toml`, 3000 lattice steps;
+//! - `builtin_example_96x96`: `configs/spm/tumbling.toml`, 4000 steps (0.3 ms a step, where
+//!   the fixed cost per step of the coupling shows most).
+//!
+//! Criterion times each layout in a block of samples of its own, and on a shared machine the
+//! load can change between blocks. So after criterion's report the bench takes 7 more pairs
+//! of runs per scene, in-process then three processes, and prints:
+//! - the overhead of each pair of whole runs and their median;
+//! - the start-up of each layout (the same run with one step, median of 7);
+//! - the overhead per step: each pair's run times less the start-ups, median over pairs.
+//!   This is what a long run pays; the benchmark's short runs pay the start-up on top.
+//!
+//! `cargo bench --bench coupled_run` (builds the node executables first). Figures in
+//! docs/performance.md, "Coupling overhead".
+use criterion::{Criterion, SamplingMode};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The release executables, built (or found up to date) once.
+fn bin_dir() -> PathBuf {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let status = Command::new(cargo)
+        .args(["build", "--release", "--bins", "--workspace"])
+        .current_dir(root())
+        .status()
+        .expect("run cargo build");
+    assert!(status.success(), "building the node executables failed");
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join("target"))
+        .join("release")
+}
+
+struct Case {
+    name: &'static str,
+    scene: &'static str,
+    overrides: &'static [&'static str],
+    /// Rough wall time of one run, seconds: sets criterion's measurement time so that
+    /// 10 samples of one run each fit.
+    seconds: f64,
+}
+
+const CASES: [Case; 5] = [
+    Case {
+        name: "spm_2d_256x200_18_beads",
+        scene: "configs/spm/coupled_2d.toml",
+        overrides: &[],
+        seconds: 1.3,
+    },
+    Case {
+        name: "capillary_2d_256x200_18_beads",
+        scene: "configs/capillary/encapsulation_2d.toml",
+        overrides: &[
+            "time.steps=500",
+            "output.interval=250",
+            "analysis.metrics=[]",
+            "fluid.viscosity=1.0",
+            "time.dt=1.0",
+            "fibre.0.youngs_modulus=0.424413",
+        ],
+        seconds: 1.4,
+    },
+    Case {
+        name: "spm_3d_128x120x120_10_beads",
+        scene: "configs/spm/coupled_3d.toml",
+        overrides: &[],
+        seconds: 2.0,
+    },
+    Case {
+        name: "fpd_jeffery_rigid_100x200",
+        scene: "configs/fpd/jeffery_rigid.toml",
+        overrides: &[
+            "time.steps=3000",
+            "output.interval=1000",
+            "analysis.metrics=[]",
+        ],
+        seconds: 1.4,
+    },
+    Case {
+        name: "builtin_example_96x96",
+        scene: "configs/spm/tumbling.toml",
+        overrides: &[
+            "time.steps=4000",
+            "output.interval=1000",
+            "analysis.metrics=[]",
+        ],
+        seconds: 1.4,
+    },
+];
+
+const LAYOUTS: [(&str, bool); 2] = [("in_process", true), ("processes", false)];
+
+/// Pairs of runs in the paired comparison after criterion's report.
+const PAIRS: usize = 7;
+
+fn run_once(bin: &Path, case: &Case, in_process: bool, out: &Path, extra: &[&str]) -> Duration {
+    let mut c = Command::new(bin.join("coordinator"));
+    c.arg("run")
+        .arg(root().join(case.scene))
+        .args(["--quiet", "--out"])
+        .arg(out)
+        .current_dir(root());
+    for o in case.overrides.iter().chain(extra) {
+        c.args(["--set", o]);
+    }
+    if in_process {
+        c.arg("--in-process");
+    }
+    let t = Instant::now();
+    let o = c.output().expect("start the coordinator");
+    let dt = t.elapsed();
+    assert!(
+        o.status.success(),
+        "{} failed: {}",
+        case.name,
+        String::from_utf8_lossy(&o.stderr)
+    );
+    dt
+}
+
+fn bench(c: &mut Criterion, bin: &Path, out: &Path) {
+    for case in &CASES {
+        let mut group = c.benchmark_group(format!("coupled_run/{}", case.name));
+        group
+            .sample_size(10)
+            .sampling_mode(SamplingMode::Flat)
+            .warm_up_time(Duration::from_secs_f64(case.seconds))
+            .measurement_time(Duration::from_secs_f64(12.0 * case.seconds));
+        for (layout, in_process) in LAYOUTS {
+            group.bench_function(layout, |b| {
+                b.iter_custom(|iters| {
+                    let mut total = Duration::ZERO;
+                    for _ in 0..iters {
+                        total += run_once(bin, case, in_process, out, &[]);
+                    }
+                    total
+                })
+            });
+        }
+        group.finish();
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Runs of the two layouts taken turn about, so that a change in the machine's load between
+/// criterion's blocks of samples does not show as overhead (see the module's doc).
+fn paired_overheads(bin: &Path, out: &Path) {
+    println!("\ncoupled_run: {PAIRS} pairs of runs taken turn about, three processes over one");
+    for case in &CASES {
+        let run = |in_process: bool, extra: &[&str]| {
+            run_once(bin, case, in_process, out, extra).as_secs_f64()
+        };
+        let start_up: Vec<(f64, f64)> = (0..PAIRS)
+            .map(|_| (run(true, &["time.steps=1"]), run(false, &["time.steps=1"])))
+            .collect();
+        let s_in = median(start_up.iter().map(|p| p.0).collect());
+        let s_ps = median(start_up.iter().map(|p| p.1).collect());
+        let pairs: Vec<(f64, f64)> = (0..PAIRS)
+            .map(|_| (run(true, &[]), run(false, &[])))
+            .collect();
+        let mut whole: Vec<f64> = pairs.iter().map(|(i, p)| 100.0 * (p / i - 1.0)).collect();
+        whole.sort_by(f64::total_cmp);
+        let per_step = median(
+            pairs
+                .iter()
+                .map(|(i, p)| 100.0 * ((p - s_ps) / (i - s_in) - 1.0))
+                .collect(),
+        );
+        let list: Vec<String> = whole.iter().map(|o| format!("{o:+.1}")).collect();
+        println!("  {}", case.name);
+        println!(
+            "    whole runs: in-process {:.3} s, processes {:.3} s (medians); overhead {} %, median {:+.1} %",
+            median(pairs.iter().map(|p| p.0).collect()),
+            median(pairs.iter().map(|p| p.1).collect()),
+            list.join(" / "),
+            median(whole.clone())
+        );
+        println!(
+            "    start-up (one step): in-process {s_in:.3} s, processes {s_ps:.3} s; overhead per step without it: median {per_step:+.1} %"
+        );
+    }
+}
+
+fn main() {
+    let bin = bin_dir();
+    let out = root()
+        .join("target")
+        .join("bench-runs")
+        .join(format!("coupled_run-{}", std::process::id()));
+    let mut c = Criterion::default().configure_from_args();
+    bench(&mut c, &bin, &out);
+    c.final_summary();
+    paired_overheads(&bin, &out);
+    let _ = std::fs::remove_dir_all(&out);
+}
