@@ -1,5 +1,6 @@
 //! Every scene in `configs/` is valid: it parses, the components fit, and each node accepts
-//! its tables and the time step (what `coordinator check` does). Runs nothing.
+//! its tables and the time step (what `coordinator check` does); so is every variant of every
+//! study in `docs/validation/`. Runs nothing.
 mod common;
 use common::*;
 
@@ -27,5 +28,27 @@ fn every_scene_in_configs_checks() {
         let scene = coordinator::scene::load(Some(p), &[])
             .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
         coordinator::runner::check(&scene).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    }
+}
+
+/// Every study in `docs/validation/` is valid: it parses, and every variant's scene checks
+/// with the study's metric among its metrics (what `coordinator study FILE --check` does).
+/// Runs nothing; keeps the documented studies runnable as scenes and keys change.
+#[test]
+fn every_study_in_docs_validation_checks() {
+    let dir = root().join("docs").join("validation");
+    let mut studies: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.to_string_lossy().ends_with(".study.toml"))
+        .collect();
+    studies.sort();
+    assert!(
+        studies.len() >= 10,
+        "expected the validation studies, found {studies:?}"
+    );
+    for p in &studies {
+        let n = coordinator::study::check_file(p).unwrap_or_else(|e| panic!("{e}"));
+        assert!(n > 0, "{}: no variants", p.display());
     }
 }

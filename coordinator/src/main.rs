@@ -81,6 +81,9 @@ enum Cmd {
         /// the wall times then include the runs' contention, so keep 1 for cost plots).
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
         jobs: u16,
+        /// Check every variant as `coordinator check` does and run nothing.
+        #[arg(long, conflicts_with_all = ["replot", "out", "jobs"])]
+        check: bool,
     },
 }
 
@@ -192,10 +195,22 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             Ok(())
         }
         Cmd::Study {
+            study, check: true, ..
+        } => {
+            let n = study::check_file(&study)?;
+            println!(
+                "ok: {} variants of {} check; nothing was run",
+                n,
+                study.display()
+            );
+            Ok(())
+        }
+        Cmd::Study {
             study,
             out,
             replot,
             jobs,
+            check: false,
         } => {
             let exe = std::env::current_exe()
                 .map_err(|e| format!("cannot find this executable for --jobs: {e}"))?;

@@ -169,9 +169,8 @@ pub struct Row {
     pub curve_x: Option<f64>,
 }
 
-/// Read and run a study file (or, with `replot`, reuse its previous runs); returns the
-/// markdown table.
-pub fn run_file(path: &Path, out: Option<&Path>, runs: Runs) -> Result<String, String> {
+/// Read a study file; returns the study and the directory its relative paths start from.
+fn load(path: &Path) -> Result<(Study, PathBuf), String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read study file {}: {e}", path.display()))?;
     let study: Study =
@@ -190,11 +189,30 @@ pub fn run_file(path: &Path, out: Option<&Path>, runs: Runs) -> Result<String, S
                 e.inner().to_string().trim()
             )
         })?;
-    let base = path.parent().unwrap_or(Path::new("."));
+    let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    Ok((study, base))
+}
+
+/// Read and run a study file (or, with `replot`, reuse its previous runs); returns the
+/// markdown table.
+pub fn run_file(path: &Path, out: Option<&Path>, runs: Runs) -> Result<String, String> {
+    let (study, base) = load(path)?;
     let out_dir = out
         .map(Path::to_path_buf)
         .unwrap_or_else(|| base.join(&study.output));
     run(&study, &base.join(&study.scene), &out_dir, runs)
+}
+
+/// Check a study file without running it: it parses, and every variant's scene passes
+/// `coordinator check` (its overrides apply, the nodes accept it, the time step is within
+/// the limits) with the study's metric among its metrics. Returns the number of variants.
+pub fn check_file(path: &Path) -> Result<usize, String> {
+    let (study, base) = load(path)?;
+    let variants = prepare(&study, &base.join(&study.scene))?;
+    for v in &variants {
+        runner::check(&v.scene).map_err(|e| format!("variant {}: {e}", v.label))?;
+    }
+    Ok(variants.len())
 }
 
 /// How a study gets the runs of its variants.
@@ -313,8 +331,9 @@ fn toml_inline(v: &toml::Value) -> String {
 
 /// Run every variant of `study` on `scene_path` as `runs` says (or read the summaries of an
 /// earlier run of it); write `<name>.csv`, `.md`, `.png` to `out`.
-pub fn run(study: &Study, scene_path: &Path, out: &Path, runs: Runs) -> Result<String, String> {
-    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+/// Every variant of `study`: its overrides, label and loaded scene, in the order of the
+/// table (the last `[[vary]]` entry varies fastest).
+fn prepare(study: &Study, scene_path: &Path) -> Result<Vec<Variant>, String> {
     let mut variants: Vec<Vec<(String, toml::Value)>> = vec![Vec::new()];
     for (i, v) in study.vary.iter().enumerate() {
         let options = v.assignments(i)?;
@@ -389,6 +408,15 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, runs: Runs) -> Result<S
             resolution,
         });
     }
+    Ok(prepared)
+}
+
+/// Run (or, with [`Runs::Reuse`], read back) every variant of `study` and write the table,
+/// CSV and plots into `out`; returns the markdown table.
+pub fn run(study: &Study, scene_path: &Path, out: &Path, runs: Runs) -> Result<String, String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let prepared = prepare(study, scene_path)?;
+    let count = prepared.len();
     if let Runs::Parallel { exe, jobs } = runs {
         run_in_parallel(study, scene_path, &prepared, exe, jobs)?;
     }
@@ -403,12 +431,7 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, runs: Runs) -> Result<S
         } = v;
         let outcome = match runs {
             Runs::OneByOne => {
-                eprintln!(
-                    "study {}: variant {}/{}: {label}",
-                    study.name,
-                    i + 1,
-                    variants.len()
-                );
+                eprintln!("study {}: variant {}/{}: {label}", study.name, i + 1, count);
                 let opts = RunOptions::quiet(run_dir, !study.processes);
                 runner::run(&scene, &opts).map(|r| r.summary)
             }
