@@ -329,8 +329,6 @@ fn toml_inline(v: &toml::Value) -> String {
     v.to_string()
 }
 
-/// Run every variant of `study` on `scene_path` as `runs` says (or read the summaries of an
-/// earlier run of it); write `<name>.csv`, `.md`, `.png` to `out`.
 /// Every variant of `study`: its overrides, label and loaded scene, in the order of the
 /// table (the last `[[vary]]` entry varies fastest).
 fn prepare(study: &Study, scene_path: &Path) -> Result<Vec<Variant>, String> {
@@ -411,8 +409,8 @@ fn prepare(study: &Study, scene_path: &Path) -> Result<Vec<Variant>, String> {
     Ok(prepared)
 }
 
-/// Run (or, with [`Runs::Reuse`], read back) every variant of `study` and write the table,
-/// CSV and plots into `out`; returns the markdown table.
+/// Run every variant of `study` on `scene_path` as `runs` says (or read the summaries of an
+/// earlier run of it); write `<name>.csv`, `.md`, `.png` to `out`; returns the markdown table.
 pub fn run(study: &Study, scene_path: &Path, out: &Path, runs: Runs) -> Result<String, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let prepared = prepare(study, scene_path)?;
