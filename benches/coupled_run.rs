@@ -21,11 +21,13 @@
 //! - the overhead per step: each pair's run times less the start-ups, median over pairs.
 //!   This is what a long run pays; the benchmark's short runs pay the start-up on top.
 //!
-//! `cargo bench --bench coupled_run` (builds the node executables first). Figures in
+//! `cargo bench --bench coupled_run` (builds the node executables first; about 5 minutes);
+//! a filter such as `-- builtin` times and pairs only the matching scenes. Figures in
 //! docs/performance.md, "Coupling overhead".
 use criterion::{Criterion, SamplingMode};
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 fn root() -> PathBuf {
@@ -109,6 +111,9 @@ const LAYOUTS: [(&str, bool); 2] = [("in_process", true), ("processes", false)];
 /// Pairs of runs in the paired comparison after criterion's report.
 const PAIRS: usize = 7;
 
+/// The cases criterion timed in this run of the bench.
+static TIMED: Mutex<Vec<&'static str>> = Mutex::new(Vec::new());
+
 fn run_once(bin: &Path, case: &Case, in_process: bool, out: &Path, extra: &[&str]) -> Duration {
     let mut c = Command::new(bin.join("coordinator"));
     c.arg("run")
@@ -145,6 +150,11 @@ fn bench(c: &mut Criterion, bin: &Path, out: &Path) {
         for (layout, in_process) in LAYOUTS {
             group.bench_function(layout, |b| {
                 b.iter_custom(|iters| {
+                    let mut timed = TIMED.lock().unwrap();
+                    if !timed.contains(&case.name) {
+                        timed.push(case.name);
+                    }
+                    drop(timed);
                     let mut total = Duration::ZERO;
                     for _ in 0..iters {
                         total += run_once(bin, case, in_process, out, &[]);
@@ -168,10 +178,15 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// Runs of the two layouts taken turn about, so that a change in the machine's load between
-/// criterion's blocks of samples does not show as overhead (see the module's doc).
+/// criterion's blocks of samples does not show as overhead (see the module's doc); for the
+/// cases criterion timed (a filter on the command line leaves the others out).
 fn paired_overheads(bin: &Path, out: &Path) {
+    let timed = TIMED.lock().unwrap().clone();
+    if timed.is_empty() {
+        return;
+    }
     println!("\ncoupled_run: {PAIRS} pairs of runs taken turn about, three processes over one");
-    for case in &CASES {
+    for case in CASES.iter().filter(|c| timed.contains(&c.name)) {
         let run = |in_process: bool, extra: &[&str]| {
             run_once(bin, case, in_process, out, extra).as_secs_f64()
         };
@@ -215,6 +230,10 @@ fn main() {
     let mut c = Criterion::default().configure_from_args();
     bench(&mut c, &bin, &out);
     c.final_summary();
-    paired_overheads(&bin, &out);
+    // `cargo test --benches` runs each benchmark once (`--test`) to see that it works: no
+    // timing, so no paired runs either.
+    if !std::env::args().any(|a| a == "--test" || a == "--list") {
+        paired_overheads(&bin, &out);
+    }
     let _ = std::fs::remove_dir_all(&out);
 }
