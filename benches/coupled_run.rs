@@ -24,30 +24,13 @@
 //! `cargo bench --bench coupled_run` (builds the node executables first; about 5 minutes);
 //! a filter such as `-- builtin` times and pairs only the matching scenes. Figures in
 //! docs/performance.md, "Coupling overhead".
+#[path = "../tests/common/mod.rs"]
+mod common;
+use common::{bin_dir, root, run_command};
 use criterion::{Criterion, SamplingMode};
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// The release executables, built (or found up to date) once.
-fn bin_dir() -> PathBuf {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let status = Command::new(cargo)
-        .args(["build", "--release", "--bins", "--workspace"])
-        .current_dir(root())
-        .status()
-        .expect("run cargo build");
-    assert!(status.success(), "building the node executables failed");
-    std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root().join("target"))
-        .join("release")
-}
 
 struct Case {
     name: &'static str,
@@ -114,13 +97,8 @@ const PAIRS: usize = 7;
 /// The cases criterion timed in this run of the bench.
 static TIMED: Mutex<Vec<&'static str>> = Mutex::new(Vec::new());
 
-fn run_once(bin: &Path, case: &Case, in_process: bool, out: &Path, extra: &[&str]) -> Duration {
-    let mut c = Command::new(bin.join("coordinator"));
-    c.arg("run")
-        .arg(root().join(case.scene))
-        .args(["--quiet", "--out"])
-        .arg(out)
-        .current_dir(root());
+fn run_once(case: &Case, in_process: bool, out: &Path, extra: &[&str]) -> Duration {
+    let mut c = run_command(&root().join(case.scene), out);
     for o in case.overrides.iter().chain(extra) {
         c.args(["--set", o]);
     }
@@ -139,7 +117,7 @@ fn run_once(bin: &Path, case: &Case, in_process: bool, out: &Path, extra: &[&str
     dt
 }
 
-fn bench(c: &mut Criterion, bin: &Path, out: &Path) {
+fn bench(c: &mut Criterion, out: &Path) {
     for case in &CASES {
         let mut group = c.benchmark_group(format!("coupled_run/{}", case.name));
         group
@@ -157,7 +135,7 @@ fn bench(c: &mut Criterion, bin: &Path, out: &Path) {
                     drop(timed);
                     let mut total = Duration::ZERO;
                     for _ in 0..iters {
-                        total += run_once(bin, case, in_process, out, &[]);
+                        total += run_once(case, in_process, out, &[]);
                     }
                     total
                 })
@@ -180,16 +158,15 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// Runs of the two layouts taken turn about, so that a change in the machine's load between
 /// criterion's blocks of samples does not show as overhead (see the module's doc); for the
 /// cases criterion timed (a filter on the command line leaves the others out).
-fn paired_overheads(bin: &Path, out: &Path) {
+fn paired_overheads(out: &Path) {
     let timed = TIMED.lock().unwrap().clone();
     if timed.is_empty() {
         return;
     }
     println!("\ncoupled_run: {PAIRS} pairs of runs taken turn about, three processes over one");
     for case in CASES.iter().filter(|c| timed.contains(&c.name)) {
-        let run = |in_process: bool, extra: &[&str]| {
-            run_once(bin, case, in_process, out, extra).as_secs_f64()
-        };
+        let run =
+            |in_process: bool, extra: &[&str]| run_once(case, in_process, out, extra).as_secs_f64();
         let start_up: Vec<(f64, f64)> = (0..PAIRS)
             .map(|_| (run(true, &["time.steps=1"]), run(false, &["time.steps=1"])))
             .collect();
@@ -222,18 +199,19 @@ fn paired_overheads(bin: &Path, out: &Path) {
 }
 
 fn main() {
-    let bin = bin_dir();
+    // Build (or find up to date) the executables before anything is timed.
+    bin_dir();
     let out = root()
         .join("target")
         .join("bench-runs")
         .join(format!("coupled_run-{}", std::process::id()));
     let mut c = Criterion::default().configure_from_args();
-    bench(&mut c, &bin, &out);
+    bench(&mut c, &out);
     c.final_summary();
     // `cargo test --benches` runs each benchmark once (`--test`) to see that it works: no
     // timing, so no paired runs either.
     if !std::env::args().any(|a| a == "--test" || a == "--list") {
-        paired_overheads(&bin, &out);
+        paired_overheads(&out);
     }
     let _ = std::fs::remove_dir_all(&out);
 }

@@ -46,8 +46,8 @@ pub fn metric(summary: &serde_json::Value, name: &str) -> (f64, f64) {
     )
 }
 
-/// Directory of the release binaries, built once per test process (cargo's freshness check
-/// makes this cheap when they are up to date).
+/// Directory of the release binaries (coordinator, fibre node, fluid node), built once per
+/// test process (cargo's freshness check makes this cheap when they are up to date).
 pub fn bin_dir() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
@@ -59,6 +59,8 @@ pub fn bin_dir() -> &'static Path {
                 "--bins",
                 "-p",
                 "fibre-node",
+                "-p",
+                "fluid-node",
                 "-p",
                 "coordinator",
             ])
