@@ -49,6 +49,15 @@ fn pipelined_lock_step_and_in_process_runs_give_the_same_bits() {
         serde_json::from_str::<serde_json::Value>(&text).unwrap()["pipelined"].clone()
     };
     assert_eq!(pipelined_flag(&pipelined), true);
+    // Between the outputs (every 5 steps) the nodes run several steps per batch.
+    let largest_batch = |dir: &std::path::Path| {
+        let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()["largest_batch_steps"]
+            .as_u64()
+            .unwrap()
+    };
+    assert!((2..=5).contains(&largest_batch(&pipelined)));
+    assert_eq!(largest_batch(&lock_step), 0);
     let waits = |dir: &std::path::Path| {
         let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
         serde_json::from_str::<serde_json::Value>(&text).unwrap()["seconds_waiting_for_input"]
@@ -76,8 +85,14 @@ fn pipelined_lock_step_and_in_process_runs_give_the_same_bits() {
 }
 
 /// The coupled SPM scene of tests/spm.rs, as processes, with a fault injected into the fibre
-/// node at step 5 (a pipelined step: only the first step of a run is lock-step).
-fn faulty_run(name: &str, fault: &str) -> (String, serde_json::Value, Duration) {
+/// node at step 5 (a pipelined step: only the first step of a run is lock-step). With
+/// `output_interval` 1 every batch is one step; with 20, step 5 falls inside a batch of
+/// several steps.
+fn faulty_run(
+    name: &str,
+    fault: &str,
+    output_interval: u64,
+) -> (String, serde_json::Value, Duration) {
     let out = out_dir(name);
     let cfg = config("spm/jeffery_rigid.toml");
     let mut c = run_command(&cfg, &out);
@@ -95,6 +110,7 @@ fn faulty_run(name: &str, fault: &str) -> (String, serde_json::Value, Duration) 
     ] {
         c.args(["--set", o]);
     }
+    c.args(["--set", &format!("output.interval={output_interval}")]);
     let t0 = Instant::now();
     let o = c
         .args(["--node-timeout", "20"])
@@ -113,34 +129,62 @@ fn faulty_run(name: &str, fault: &str) -> (String, serde_json::Value, Duration) 
 /// states that phase would have published. The run ends at once with the fibre's message.
 #[test]
 fn a_phase_that_fails_inside_a_batch_ends_the_run_with_its_message() {
-    let (err, summary, took) = faulty_run("pipeline-refuse", "refuse-at-step:5");
-    eprintln!("{err}\n{took:?}");
-    assert!(!err.contains("panicked"), "{err}");
-    for needle in [
-        "fibre-node",
-        "step 5",
-        "fibre-velocities",
-        "injected refusal",
-    ] {
-        assert!(err.contains(needle), "message lacks `{needle}`: {err}");
+    for interval in [1, 20] {
+        let name = format!("pipeline-refuse-{interval}");
+        let (err, summary, took) = faulty_run(&name, "refuse-at-step:5", interval);
+        eprintln!("{err}\n{took:?}");
+        assert!(!err.contains("panicked"), "{err}");
+        for needle in [
+            "fibre-node",
+            "failed at step 5,",
+            "fibre-velocities",
+            "injected refusal",
+        ] {
+            assert!(err.contains(needle), "message lacks `{needle}`: {err}");
+        }
+        assert_eq!(summary["status"], "failed");
+        assert_eq!(summary["steps"], 5);
+        let batch = summary["largest_batch_steps"].as_u64().unwrap();
+        assert!(
+            if interval == 1 { batch == 1 } else { batch > 1 },
+            "{summary}"
+        );
+        // Well inside the node timeout (20 s): nobody waited for it.
+        assert!(took < Duration::from_secs(15), "took {took:?}");
     }
-    assert_eq!(summary["status"], "failed");
-    assert_eq!(summary["steps"], 5);
-    // Well inside the node timeout (20 s): nobody waited for it.
-    assert!(took < Duration::from_secs(15), "took {took:?}");
 }
 
 /// The fibre node dies at the start of its batch; the fluid node waits for its positions.
 #[test]
 fn a_node_that_dies_inside_a_batch_is_reported() {
-    let (err, summary, took) = faulty_run("pipeline-exit", "exit-at-step:5");
+    let (err, summary, took) = faulty_run("pipeline-exit", "exit-at-step:5", 1);
     eprintln!("{err}\n{took:?}");
     assert!(!err.contains("panicked"), "{err}");
-    for needle in ["fibre-node", "step 5", "injected fault"] {
+    for needle in ["fibre-node", "failed at step 5,", "injected fault"] {
         assert!(err.contains(needle), "message lacks `{needle}`: {err}");
     }
     assert_eq!(summary["status"], "failed");
     assert!(took < Duration::from_secs(15), "took {took:?}");
+    // Inside a batch of several steps the coordinator knows only the batch: the message
+    // names its steps, and the summary counts those before it.
+    let (err, summary, took) = faulty_run("pipeline-exit-batch", "exit-at-step:5", 20);
+    eprintln!("{err}\n{took:?}");
+    assert!(
+        err.contains("fibre-node") && err.contains("injected fault"),
+        "{err}"
+    );
+    let (first, last) = batch_in(&err).unwrap_or_else(|| panic!("no batch named: {err}"));
+    assert!(first < last && (first..=last).contains(&5), "{err}");
+    assert_eq!(summary["steps"], first);
+    assert!(took < Duration::from_secs(15), "took {took:?}");
+}
+
+/// The steps of the batch a message names: "failed at step A, or later, up to B".
+fn batch_in(message: &str) -> Option<(u64, u64)> {
+    let rest = &message[message.find("failed at step ")? + "failed at step ".len()..];
+    let (first, rest) = rest.split_once(", or later, up to ")?;
+    let last: String = rest.chars().take_while(char::is_ascii_digit).collect();
+    Some((first.parse().ok()?, last.parse().ok()?))
 }
 
 /// Ctrl-C while the fluid node's next batch is already out (binary fluid: it starts with the

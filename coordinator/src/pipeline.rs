@@ -95,8 +95,8 @@ impl Batches {
         b
     }
 
-    /// The batch of node `o` for `step`.
-    fn batch(&self, o: usize, step: u64) -> Command {
+    /// The batch of node `o` for `count` steps from `step`.
+    fn batch(&self, o: usize, step: u64, count: u64) -> Command {
         let list = &self
             .per_node
             .iter()
@@ -114,7 +114,11 @@ impl Batches {
                 then_wake: wake.clone(),
             })
             .collect();
-        Command::RunPhases { step, phases }
+        Command::RunPhases {
+            step,
+            phases,
+            steps: count,
+        }
     }
 
     /// Whether node `o`'s batch may go out a step early: every phase of it that reads the other
@@ -136,33 +140,54 @@ impl Batches {
         self.sent_early == Some(step)
     }
 
-    /// Run one step: send every node its batch (unless it went out with the step before),
-    /// collect the replies. With `send_next`, the nodes that can start the next step alone get
-    /// its batch now too; the caller must then run that step. Returns the phases' reports in
-    /// schedule order, adds each phase's time inside its node to `seconds` and the time it
-    /// waited there for its input to `waiting`.
-    pub(crate) fn run_step(
+    /// Run `count` steps from `step`: send every node its batch (unless it went out with the
+    /// step before), collect the replies. With `send_next` (one step only), the nodes that
+    /// can start the next step alone get its batch now too; the caller must then run that
+    /// step. Returns the phases' reports in schedule order, step by step, adds each phase's
+    /// time inside its node to `seconds` and the time it waited there for its input to
+    /// `waiting`. `timeout` is per step. An error comes with the number of steps known to be
+    /// done: the step a node failed at, or the batch's first step if that is all it is known.
+    pub(crate) fn run_steps(
         &mut self,
         step: u64,
+        count: u64,
         send_next: bool,
         nodes: &mut [Node],
         (seconds, waiting): (&mut BTreeMap<String, f64>, &mut BTreeMap<String, f64>),
         timeout: Duration,
-    ) -> Result<Vec<PhaseReport>, RunError> {
+    ) -> Result<Vec<Vec<PhaseReport>>, (RunError, u64)> {
+        let at_first = |e| (e, step);
+        // A node that fails without saying where failed somewhere in the batch.
+        let failed = |name: &str, e| {
+            if count == 1 {
+                (node_failed(name, step, "", e), step)
+            } else {
+                let last = step + count - 1;
+                let e = node_failed(
+                    name,
+                    step,
+                    &format!("or later, up to {last} (one batch), "),
+                    e,
+                );
+                (e, step)
+            }
+        };
+        let count = count.max(1);
+        let timeout = timeout.saturating_mul(u32::try_from(count).unwrap_or(u32::MAX));
         let sent_early = self.sent_early.take() == Some(step);
         for (o, _) in &self.per_node {
             if sent_early && self.early.contains(o) {
                 continue;
             }
             let link = &mut nodes[*o].link;
-            link.send(&self.batch(*o, step))
-                .map_err(|e| node_failed(link.name(), step, "", e))?;
+            link.send(&self.batch(*o, step, count))
+                .map_err(|e| failed(link.name(), e))?;
         }
-        if send_next && !self.early.is_empty() {
+        if send_next && count == 1 && !self.early.is_empty() {
             for &o in &self.early {
                 let link = &mut nodes[o].link;
-                link.send(&self.batch(o, step + 1))
-                    .map_err(|e| node_failed(link.name(), step + 1, "", e))?;
+                link.send(&self.batch(o, step + 1, 1))
+                    .map_err(|e| at_first(node_failed(link.name(), step + 1, "", e)))?;
             }
             self.sent_early = Some(step + 1);
         }
@@ -184,12 +209,17 @@ impl Batches {
                 let link = &mut nodes[*o].link;
                 let reply = link
                     .receive_within(limit)
-                    .map_err(|e| node_failed(link.name(), step, "", e))?;
+                    .map_err(|e| failed(link.name(), e))?;
                 match reply {
                     Some(Reply::PhasesDone(r)) => replies[*o] = Some(r),
+                    Some(Reply::PhasesFailed { step: at, message }) => {
+                        let node = link.name().to_string();
+                        let e = LinkFailure::Refused { node, message };
+                        return Err((node_failed(link.name(), at, "", e), at));
+                    }
                     Some(other) => {
                         let e = LinkFailure::Setup(format!("unexpected reply {other:?}"));
-                        return Err(node_failed(link.name(), step, "", e));
+                        return Err(failed(link.name(), e));
                     }
                     None => {}
                 }
@@ -204,33 +234,42 @@ impl Batches {
                     .filter(|(o, _)| replies[*o].is_none())
                     .map(|(o, _)| format!("`{}`", nodes[*o].link.name()))
                     .collect();
-                return Err(fail(format!(
-                    "step {step}: node {} did not answer within {} s (one may be waiting for \
-                     the other)",
+                let steps = if count == 1 {
+                    format!("step {step}")
+                } else {
+                    format!("steps {step} to {}", step + count - 1)
+                };
+                return Err(at_first(fail(format!(
+                    "{steps}: node {} did not answer within {} s (one may be waiting for the \
+                     other)",
                     silent.join(" and "),
                     timeout.as_secs_f64()
-                )));
+                ))));
             }
         }
         let mut next = vec![0usize; nodes.len()];
-        let mut reports = Vec::with_capacity(self.schedule.len());
-        for (&phase, &o) in self.schedule.iter().zip(&self.owner) {
-            let r = replies[o]
-                .as_mut()
-                .and_then(|list| list.get_mut(next[o]))
-                .map(std::mem::take)
-                .ok_or_else(|| {
-                    fail(format!(
-                        "node `{}` answered step {step} without a report for phase {phase}",
-                        nodes[o].link.name()
-                    ))
-                })?;
-            next[o] += 1;
-            *seconds.entry(phase.name().to_string()).or_default() += r.seconds;
-            *waiting.entry(phase.name().to_string()).or_default() += r.waited;
-            reports.push(r.report);
+        let mut all = Vec::with_capacity(count as usize);
+        for s in step..step + count {
+            let mut reports = Vec::with_capacity(self.schedule.len());
+            for (&phase, &o) in self.schedule.iter().zip(&self.owner) {
+                let r = replies[o]
+                    .as_mut()
+                    .and_then(|list| list.get_mut(next[o]))
+                    .map(std::mem::take)
+                    .ok_or_else(|| {
+                        at_first(fail(format!(
+                            "node `{}` answered step {s} without a report for phase {phase}",
+                            nodes[o].link.name()
+                        )))
+                    })?;
+                next[o] += 1;
+                *seconds.entry(phase.name().to_string()).or_default() += r.seconds;
+                *waiting.entry(phase.name().to_string()).or_default() += r.waited;
+                reports.push(r.report);
+            }
+            all.push(reports);
         }
-        Ok(reports)
+        Ok(all)
     }
 }
 

@@ -395,6 +395,8 @@ struct RunState {
     pipelined: bool,
     /// Pipelined runs: seconds each phase waited inside its node for the other node's input.
     seconds_waiting: BTreeMap<String, f64>,
+    /// Pipelined runs: the most steps sent to the nodes as one batch.
+    largest_batch: u64,
     last_diagnostics: Vec<(String, f64)>,
     metrics: BTreeMap<String, crate::metrics::Metric>,
     /// Metrics asked for that could not be computed, with the reason.
@@ -456,6 +458,7 @@ impl RunState {
             "process_layout": if opts.in_process { "in-process" } else { "processes" },
             "pipelined": self.pipelined,
             "seconds_waiting_for_input": self.seconds_waiting,
+            "largest_batch_steps": self.largest_batch,
             "steps": self.steps_done,
             "steps_requested": scene.scene.time.steps,
             "dt": scene.scene.time.dt,
@@ -588,6 +591,10 @@ fn drive(
     st.pipelined = batches.is_some();
     let every = opts.checkpoint_interval;
     let rests = scene.scene.time.rest_tolerance.is_some();
+    // Reports of the steps the nodes ran ahead of the loop in a multi-step batch, and the wall
+    // time of one step of the last batch (how many steps the next may hold).
+    let mut ahead: std::collections::VecDeque<Vec<PhaseReport>> = Default::default();
+    let mut step_wall: Option<f64> = None;
     for step in first_step..steps {
         // A batch may go out a step early (pipeline.rs) only if nothing can end the run or
         // save it between the two steps: not before the last step, a checkpoint, a possible
@@ -598,16 +605,42 @@ fn drive(
             && !INTERRUPTED.load(Ordering::SeqCst);
         let mut next_sent = false;
         let reports = match &mut batches {
+            Some(_) if !ahead.is_empty() => ahead.pop_front().expect("not empty"),
             Some(b) if step > first_step => {
-                let reports = b.run_step(
-                    step,
-                    send_next,
-                    nodes,
-                    (&mut st.seconds_per_phase, &mut st.seconds_waiting),
-                    opts.node_timeout,
-                )?;
+                // Several steps in one batch where the coordinator needs nothing in between;
+                // a single step may send the next one early (then that one is single too),
+                // unless the next is to be a batch of several.
+                let single = track || rests || INTERRUPTED.load(Ordering::SeqCst);
+                let steps_from = |s| match single {
+                    true => 1,
+                    false => batch_steps(s, steps, interval, every, step_wall),
+                };
+                let count = if b.sent_early(step) {
+                    1
+                } else {
+                    steps_from(step)
+                };
+                let send_next = send_next && count == 1 && steps_from(step + 1) == 1;
+                st.largest_batch = st.largest_batch.max(count);
+                let t0 = Instant::now();
+                let mut reports = b
+                    .run_steps(
+                        step,
+                        count,
+                        send_next,
+                        nodes,
+                        (&mut st.seconds_per_phase, &mut st.seconds_waiting),
+                        opts.node_timeout,
+                    )
+                    .map_err(|(e, done)| {
+                        st.steps_done = done;
+                        st.time = done as f64 * dt;
+                        e
+                    })?;
+                step_wall = Some(t0.elapsed().as_secs_f64() / count as f64);
                 next_sent = b.sent_early(step + 1);
-                reports
+                ahead.extend(reports.drain(1..));
+                reports.pop().expect("a report per step")
             }
             _ => run_step_lock_step(
                 step,
@@ -617,6 +650,8 @@ fn drive(
                 &mut st.seconds_per_phase,
             )?,
         };
+        // The nodes are past this step: it cannot be the last.
+        next_sent |= !ahead.is_empty();
         let mut report: Vec<(String, f64)> = Vec::new();
         for r in reports {
             // One value per name: a later phase's report replaces an earlier one's.
@@ -737,6 +772,38 @@ fn drive(
     Ok(status)
 }
 
+/// The longest a multi-step batch should take: the coordinator looks at Ctrl-C and the
+/// nodes' health between batches.
+const BATCH_SECONDS: f64 = 0.05;
+/// Most steps in one batch.
+const MAX_BATCH_STEPS: u64 = 64;
+
+/// How many steps from `step` the nodes may run in one batch ([`pipeline::Batches::run_steps`]):
+/// up to the next step whose end the coordinator logs (`interval`) or checkpoints (`every`, 0
+/// for never), the last step, and [`BATCH_SECONDS`] of wall time at `step_wall` seconds a step
+/// (one step while that is unknown). Each batch saves the coordinator a request and a reply
+/// to each node per step, the system calls and wake-ups of which take a core from the nodes'
+/// threads on a small machine.
+fn batch_steps(step: u64, steps: u64, interval: u64, every: u64, step_wall: Option<f64>) -> u64 {
+    let Some(wall) = step_wall else {
+        return 1;
+    };
+    // Steps up to and including the next one whose end is a multiple of `n` (0: none).
+    let until = |n: u64| step.checked_div(n).map_or(u64::MAX, |k| (k + 1) * n - step);
+    let by_time = if wall > 0.0 {
+        (BATCH_SECONDS / wall)
+            .floor()
+            .clamp(1.0, MAX_BATCH_STEPS as f64) as u64
+    } else {
+        MAX_BATCH_STEPS
+    };
+    by_time
+        .min(until(interval.max(1)))
+        .min(until(every))
+        .min(steps.saturating_sub(step))
+        .max(1)
+}
+
 /// One step with one phase at a time: the coordinator hands each phase to its node and waits
 /// for the reply. Returns the phases' reports in schedule order.
 fn run_step_lock_step(
@@ -852,4 +919,25 @@ fn progress_bar(show: bool, steps: u64) -> indicatif::ProgressBar {
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A batch ends at the next logged step, checkpoint or the last step, holds about
+    /// BATCH_SECONDS of steps, and is one step while the step's wall time is unknown.
+    #[test]
+    fn batches_end_where_the_coordinator_needs_the_nodes() {
+        let ms = Some(1e-3);
+        assert_eq!(batch_steps(3, 1000, 500, 0, None), 1);
+        assert_eq!(batch_steps(3, 1000, 500, 0, ms), 50);
+        assert_eq!(batch_steps(490, 1000, 500, 0, ms), 10);
+        assert_eq!(batch_steps(499, 1000, 500, 0, ms), 1);
+        assert_eq!(batch_steps(500, 1000, 500, 0, Some(1e-6)), MAX_BATCH_STEPS);
+        assert_eq!(batch_steps(95, 1000, 500, 100, ms), 5);
+        assert_eq!(batch_steps(998, 1000, 500, 0, ms), 2);
+        assert_eq!(batch_steps(10, 1000, 1, 0, ms), 1);
+        assert_eq!(batch_steps(10, 1000, 500, 0, Some(0.09)), 1);
+    }
 }

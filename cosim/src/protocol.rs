@@ -15,15 +15,27 @@ pub enum Command {
     /// Run one phase of one step.
     RunPhase { step: u64, phase: Phase },
     /// Run several phases of one step in order, each after its input has arrived from
-    /// another node (pipelined schedule; served over iceoryx2 only). Answered by one
-    /// [`Reply::PhasesDone`], or by the first phase's error.
-    RunPhases { step: u64, phases: Vec<PhaseOrder> },
+    /// another node (pipelined schedule; served over iceoryx2 only), and the same phases for
+    /// the `steps - 1` steps after it: step `step + j` awaits each input `j` steps later than
+    /// `phases` says. Answered by one [`Reply::PhasesDone`] with the reports step by step, or
+    /// by [`Reply::PhasesFailed`] with the first phase's error and its step.
+    RunPhases {
+        step: u64,
+        phases: Vec<PhaseOrder>,
+        /// How many consecutive steps, at least 1.
+        #[serde(default = "one_step")]
+        steps: u64,
+    },
     /// Answer with the full state, serialised (checkpoint).
     SaveState,
     /// Replace the full state by one saved earlier.
     RestoreState { state: Vec<u8> },
     /// Release resources and end the serving loop.
     Shutdown,
+}
+
+fn one_step() -> u64 {
+    1
 }
 
 /// One phase of a [`Command::RunPhases`] batch.
@@ -60,8 +72,14 @@ pub enum Reply {
     Description(ModelDescription),
     Configured(Configured),
     PhaseDone(PhaseReport),
-    /// The reports of a [`Command::RunPhases`] batch, one per phase, in order.
+    /// The reports of a [`Command::RunPhases`] batch, one per phase and step, in order.
     PhasesDone(Vec<TimedReport>),
+    /// A [`Command::RunPhases`] batch failed at `step` (its earlier steps ran); the message
+    /// says why, for the user.
+    PhasesFailed {
+        step: u64,
+        message: String,
+    },
     State(Vec<u8>),
     Ok,
     /// The command failed; the message says why, for the user.

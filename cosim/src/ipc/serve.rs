@@ -71,7 +71,11 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
             Ok(command) => {
                 kind = super::wait_kind(&command);
                 match command {
-                    Command::RunPhases { step, phases } => {
+                    Command::RunPhases {
+                        step,
+                        phases,
+                        steps,
+                    } => {
                         let mut batch = Batch {
                             server: &server,
                             listener: &listener,
@@ -83,7 +87,8 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
                             queue: &mut queue,
                             prefix,
                         };
-                        (batch.run(component, &mut exchange, step, &phases)?, false)
+                        let reply = batch.run(component, &mut exchange, step, steps, &phases)?;
+                        (reply, false)
                     }
                     other => crate::dispatch(component, &mut exchange, other),
                 }
@@ -174,8 +179,8 @@ struct Batch<'a> {
 }
 
 impl Batch<'_> {
-    /// Run the phases in order, each once its input is there; wake the node that waits for
-    /// a phase's output. Returns the reply. If a request other than a batch comes while a
+    /// Run the phases in order, each once its input is there, for `steps` consecutive steps
+    /// from `first`; wake the node that waits for a phase's output. Returns the reply. If a request other than a batch comes while a
     /// phase waits for its input, the coordinator has given up on this step (e.g. the other
     /// node failed): the batch ends there with an error, the batches queued behind it are
     /// answered with an error unserved, and that request is left in the queue.
@@ -183,14 +188,18 @@ impl Batch<'_> {
         &mut self,
         component: &mut dyn Component,
         exchange: &mut IpcExchange,
-        step: u64,
+        first: u64,
+        steps: u64,
         phases: &[PhaseOrder],
     ) -> Result<Reply, IpcError> {
-        let mut reports = Vec::with_capacity(phases.len());
-        for order in phases {
+        let steps = steps.max(1);
+        let mut reports = Vec::with_capacity(phases.len() * steps as usize);
+        for (j, order) in (0..steps).flat_map(|j| phases.iter().map(move |o| (j, o))) {
+            let step = first + j;
             let phase = order.phase;
             let mut waited = 0.0;
-            if let Some(awaited) = order.awaits {
+            if let Some(mut awaited) = order.awaits {
+                awaited.step += j;
                 let kind = super::input_wait_kind(phase);
                 let start = std::time::Instant::now();
                 let interrupted = self.wait_for_input(exchange, awaited, kind)?;
@@ -204,25 +213,25 @@ impl Batch<'_> {
                         answer(queued, &reply, self.replied, self.watch, self.control)?;
                     }
                     self.queue.push_back(request);
-                    return Ok(Reply::Error(format!(
-                        "phase {phase} of step {step} was still waiting for its input \
-                         ({} of step {}) when a new request came",
-                        awaited.port.name(),
-                        awaited.step
-                    )));
+                    return Ok(Reply::PhasesFailed {
+                        step,
+                        message: format!(
+                            "phase {phase} of step {step} was still waiting for its input \
+                             ({} of step {}) when a new request came",
+                            awaited.port.name(),
+                            awaited.step
+                        ),
+                    });
                 }
             }
             let start = std::time::Instant::now();
             let (reply, _) =
                 crate::dispatch(component, exchange, Command::RunPhase { step, phase });
+            let failed = |message| Ok(Reply::PhasesFailed { step, message });
             let report = match reply {
                 Reply::PhaseDone(r) => r,
-                Reply::Error(m) => return Ok(Reply::Error(format!("phase {phase}: {m}"))),
-                other => {
-                    return Ok(Reply::Error(format!(
-                        "phase {phase}: unexpected reply {other:?}"
-                    )))
-                }
+                Reply::Error(m) => return failed(format!("phase {phase}: {m}")),
+                other => return failed(format!("phase {phase}: unexpected reply {other:?}")),
             };
             reports.push(TimedReport {
                 report,
