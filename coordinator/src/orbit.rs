@@ -43,6 +43,12 @@ pub const STUCK_TAIL_FRACTION: f64 = 0.2;
 /// rate four times smaller cannot be a tumbling fibre (of at least that aspect ratio).
 pub const STUCK_RATE_FRACTION: f64 = 0.25;
 
+/// A stuck fibre whose rate over the last half of the tail is still at least this fraction of
+/// the rate over the first half (same sense, and above a tenth of the stuck threshold) is
+/// not settling at an angle but creeping steadily: the analysis says so in its reason, since
+/// a longer run may see it turn on. The label stays `stuck` (S2023's test is the rate).
+pub const CREEP_TREND: f64 = 0.8;
+
 /// How the fibre's direction is taken from its beads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Orientation {
@@ -165,6 +171,9 @@ pub struct OrbitAnalysis {
     /// threshold it was compared with (degrees per time unit).
     pub tail_rate_deg: f64,
     pub stuck_threshold_deg: f64,
+    /// Rate over the last half of that tail over the rate over its first half (`None` if the
+    /// first is zero): near 0 for a fibre settling at an angle, near 1 for a steady creep.
+    pub tail_rate_trend: Option<f64>,
     /// Complete half-turns (rotations by 180 deg between passes through 90 deg).
     pub half_turns: Vec<HalfTurn>,
     /// S2023's tumbling period T, the mean time to rotate 180 deg over the complete
@@ -236,6 +245,11 @@ impl OrbitAnalysis {
             ("half_turn_period_gamma", self.period_gamma),
             ("period_aspect_ratio", self.period_aspect_ratio),
             ("stuck_angle_deg", self.stuck_angle_deg),
+            (
+                "tail_rate_trend",
+                self.tail_rate_trend
+                    .filter(|_| self.kind == OrbitKind::Stuck),
+            ),
             ("fold_angle_deg", self.fold_angle_deg()),
             ("straightened_at_deg", self.straightened_at_deg()),
             (
@@ -494,6 +508,21 @@ pub fn analyse_series(
     let rc_geo = 1.0 / beads as f64;
     let threshold = STUCK_RATE_FRACTION * gamma * rc_geo * rc_geo / (1.0 + rc_geo * rc_geo);
     let stuck = tail_rate.abs() < threshold;
+    // The tail in two halves: is the rate falling (settling) or steady (creeping)?
+    let i_mid = t
+        .iter()
+        .position(|&x| x >= 0.5 * (t[i_tail] + t[n - 1]))
+        .unwrap_or(n - 1)
+        .clamp(i_tail + 1, n - 1);
+    let rate = |a: usize, b: usize| (th[b] - th[a]) / (t[b] - t[a]);
+    let (early, late) = if i_mid < n - 1 {
+        (rate(i_tail, i_mid), rate(i_mid, n - 1))
+    } else {
+        (tail_rate, tail_rate)
+    };
+    let tail_rate_trend = (early != 0.0).then(|| late / early);
+    let creeping =
+        stuck && tail_rate_trend.is_some_and(|x| x >= CREEP_TREND) && late.abs() >= 0.1 * threshold;
 
     // Folds and straightenings, with hysteresis between the two thresholds.
     let (mut folded, mut folds, mut straightenings) = (false, 0usize, 0usize);
@@ -555,7 +584,17 @@ pub fn analyse_series(
                 tail_rate.abs().to_degrees(),
                 threshold.to_degrees(),
                 STUCK_RATE_FRACTION
-            ),
+            ) + &if creeping {
+                format!(
+                    "; but the rate is not falling ({:.3e} deg per time unit over the last \
+                     half of that, {:.3e} before): a steady creep, not settling at an angle; \
+                     a longer run may see it turn on",
+                    late.abs().to_degrees(),
+                    early.abs().to_degrees()
+                )
+            } else {
+                String::new()
+            },
         )
     } else if folds == 0 {
         (
@@ -603,6 +642,7 @@ pub fn analyse_series(
         net_rotation_deg: (th[n - 1] - th[0]).to_degrees(),
         tail_rate_deg: tail_rate.to_degrees(),
         stuck_threshold_deg: threshold.to_degrees(),
+        tail_rate_trend,
         half_turns,
         half_turn_period,
         period_gamma,

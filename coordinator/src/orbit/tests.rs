@@ -171,6 +171,59 @@ fn rod_stopping_at_12_degrees_is_stuck() {
     assert!((a.net_rotation_deg + 168.0).abs() < 0.5);
 }
 
+/// A rod creeping clockwise at a steady tenth of the stuck threshold's rate... and at half of
+/// it: both are `stuck` by S2023's rate test, but the analysis tells the steady creep from
+/// the exponential approach of `rod_stopping_at_12_degrees_is_stuck` (trend near 1 against
+/// near 0) and says so in its reason when the creep is above a tenth of the threshold.
+#[test]
+fn steady_creep_is_told_from_settling() {
+    let creep = |fraction: f64| {
+        let rc = 1.0 / N as f64;
+        let threshold = STUCK_RATE_FRACTION * GAMMA * rc * rc / (1.0 + rc * rc);
+        let hist: Vec<(f64, f64)> = (0..=2000)
+            .map(|i| {
+                let t = i as f64 * 0.05;
+                (t, 10f64.to_radians() - fraction * threshold * t)
+            })
+            .collect();
+        analyse(
+            &beads_along(N, &hist, |_, _| 0.0),
+            GAMMA,
+            Orientation::EndToEnd,
+        )
+        .unwrap()
+    };
+    let a = creep(0.5);
+    eprintln!("{}", a.reason);
+    assert_eq!(a.kind, OrbitKind::Stuck);
+    assert!((a.tail_rate_trend.unwrap() - 1.0).abs() < 1e-6);
+    assert!(a.reason.contains("steady creep"), "{}", a.reason);
+    let scalars = a.scalars();
+    assert!(scalars.iter().any(|(k, _)| *k == "tail_rate_trend"));
+    // Below a tenth of the threshold the creep is not worth a word.
+    let a = creep(0.05);
+    assert_eq!(a.kind, OrbitKind::Stuck);
+    assert!(!a.reason.contains("steady creep"), "{}", a.reason);
+    // The exponential approach to 12 deg (rate gamma / 5): the rate falls over the
+    // half-tail of 10 time units by e^-4.
+    let stop = 12f64.to_radians();
+    let hist: Vec<(f64, f64)> = (0..=2000)
+        .map(|i| {
+            let t = i as f64 * 0.05;
+            (t, stop + (PI - stop) * (-GAMMA * t / 5.0).exp())
+        })
+        .collect();
+    let a = analyse(
+        &beads_along(N, &hist, |_, _| 0.0),
+        GAMMA,
+        Orientation::EndToEnd,
+    )
+    .unwrap();
+    let trend = a.tail_rate_trend.unwrap();
+    assert!(trend > 0.0 && trend < CREEP_TREND, "trend {trend}");
+    assert!(!a.reason.contains("steady creep"), "{}", a.reason);
+}
+
 /// S2023 Fig. 9(c): a folded fibre turning counter-clockwise by 20 deg and sticking there.
 #[test]
 fn folded_fibre_turning_counter_clockwise_is_s_stuck() {
