@@ -142,23 +142,33 @@ fn jeffery_fit_follows_the_aspect_ratio() {
     assert_eq!(a.kind, OrbitKind::Jeffery);
 }
 
-/// A rod turning clockwise from 180 deg and stopping at 12 deg (exponential approach, rate
-/// gamma/5): stuck at 12 +- 0.5 deg, no complete half-turn, so no period.
-#[test]
-fn rod_stopping_at_12_degrees_is_stuck() {
-    let stop = 12f64.to_radians();
+/// The analysis of a straight rod at angle `theta(t)`, sampled every 0.05 over 100 time units.
+fn straight_rod(theta: impl Fn(f64) -> f64) -> OrbitAnalysis {
     let hist: Vec<(f64, f64)> = (0..=2000)
         .map(|i| {
             let t = i as f64 * 0.05;
-            (t, stop + (PI - stop) * (-GAMMA * t / 5.0).exp())
+            (t, theta(t))
         })
         .collect();
-    let a = analyse(
+    analyse(
         &beads_along(N, &hist, |_, _| 0.0),
         GAMMA,
         Orientation::EndToEnd,
     )
-    .unwrap();
+    .unwrap()
+}
+
+/// A rod turning clockwise from 180 deg and stopping at 12 deg (exponential approach, rate
+/// gamma/5).
+fn rod_stopping_at_12_degrees() -> OrbitAnalysis {
+    let stop = 12f64.to_radians();
+    straight_rod(|t| stop + (PI - stop) * (-GAMMA * t / 5.0).exp())
+}
+
+/// That rod is stuck at 12 +- 0.5 deg, with no complete half-turn, so no period.
+#[test]
+fn rod_stopping_at_12_degrees_is_stuck() {
+    let a = rod_stopping_at_12_degrees();
     eprintln!(
         "stuck: angle {:?}, tail rate {:.2e} < {:.2e} deg/time, {}",
         a.stuck_angle_deg, a.tail_rate_deg, a.stuck_threshold_deg, a.reason
@@ -171,27 +181,16 @@ fn rod_stopping_at_12_degrees_is_stuck() {
     assert!((a.net_rotation_deg + 168.0).abs() < 0.5);
 }
 
-/// A rod creeping clockwise at a steady tenth of the stuck threshold's rate... and at half of
-/// it: both are `stuck` by S2023's rate test, but the analysis tells the steady creep from
-/// the exponential approach of `rod_stopping_at_12_degrees_is_stuck` (trend near 1 against
-/// near 0) and says so in its reason when the creep is above a tenth of the threshold.
+/// A rod creeping clockwise at a steady half, or a twentieth, of the stuck threshold's rate:
+/// both are `stuck` by S2023's rate test, but the analysis tells the steady creep from the
+/// exponential approach of `rod_stopping_at_12_degrees` (trend near 1 against near 0) and
+/// says so in its reason when the creep is above a tenth of the threshold.
 #[test]
 fn steady_creep_is_told_from_settling() {
     let creep = |fraction: f64| {
         let rc = 1.0 / N as f64;
         let threshold = STUCK_RATE_FRACTION * GAMMA * rc * rc / (1.0 + rc * rc);
-        let hist: Vec<(f64, f64)> = (0..=2000)
-            .map(|i| {
-                let t = i as f64 * 0.05;
-                (t, 10f64.to_radians() - fraction * threshold * t)
-            })
-            .collect();
-        analyse(
-            &beads_along(N, &hist, |_, _| 0.0),
-            GAMMA,
-            Orientation::EndToEnd,
-        )
-        .unwrap()
+        straight_rod(|t| 10f64.to_radians() - fraction * threshold * t)
     };
     let a = creep(0.5);
     eprintln!("{}", a.reason);
@@ -206,19 +205,7 @@ fn steady_creep_is_told_from_settling() {
     assert!(!a.reason.contains("steady creep"), "{}", a.reason);
     // The exponential approach to 12 deg (rate gamma / 5): the rate falls over the
     // half-tail of 10 time units by e^-4.
-    let stop = 12f64.to_radians();
-    let hist: Vec<(f64, f64)> = (0..=2000)
-        .map(|i| {
-            let t = i as f64 * 0.05;
-            (t, stop + (PI - stop) * (-GAMMA * t / 5.0).exp())
-        })
-        .collect();
-    let a = analyse(
-        &beads_along(N, &hist, |_, _| 0.0),
-        GAMMA,
-        Orientation::EndToEnd,
-    )
-    .unwrap();
+    let a = rod_stopping_at_12_degrees();
     let trend = a.tail_rate_trend.unwrap();
     assert!(trend > 0.0 && trend < CREEP_TREND, "trend {trend}");
     assert!(!a.reason.contains("steady creep"), "{}", a.reason);
