@@ -1,7 +1,8 @@
 //! Pipelined steps (coordinator/src/pipeline.rs): as processes, each node gets its phases of a
 //! step in one request and waits for the other node's publications itself. The results must
 //! be the bits of a lock-step run and of an in-process run, and a node that fails inside a
-//! batch must end the run with its message, not leave the other node waiting.
+//! batch must end the run with its message, not leave the other node waiting. A node alone
+//! runs in batches too.
 mod common;
 use common::*;
 use coordinator::mcap_log::read_topic;
@@ -239,4 +240,31 @@ fn an_interrupted_pipelined_run_resumes_to_the_same_bits() {
         serde_json::from_str::<serde_json::Value>(&text).unwrap()["final_diagnostics"].clone()
     };
     assert_eq!(diag(&resumed), diag(&straight));
+}
+
+/// A fluid without fibres runs alone as a process, in batches of several steps (it waits for
+/// nobody), to the bits of the same run in-process.
+#[test]
+fn a_node_alone_runs_in_batches_to_the_same_bits() {
+    let cfg = config("spm/couette.toml");
+    let o: Vec<String> = ["time.steps=400", "output.interval=50"]
+        .map(String::from)
+        .to_vec();
+    let run = |name: &str, extra: &[&str]| {
+        run_scene(name, &cfg, &o, extra).unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let alone = run("pipeline-alone", &[]);
+    let in_process = run("pipeline-alone-in-process", &["--in-process"]);
+    let summary = |dir: &std::path::Path| {
+        let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()
+    };
+    let (a, b) = (summary(&alone), summary(&in_process));
+    assert_eq!(a["pipelined"], true);
+    assert!(a["largest_batch_steps"].as_u64().unwrap() > 1, "{a}");
+    assert_eq!(a["metrics"], b["metrics"]);
+    let ta = read_topic(&alone.join("run.mcap"), "/diagnostics").unwrap();
+    let tb = read_topic(&in_process.join("run.mcap"), "/diagnostics").unwrap();
+    assert_eq!(ta.len(), 8);
+    assert_eq!(ta, tb, "diagnostics differ");
 }

@@ -143,6 +143,13 @@ impl Batches {
             .all(|(phase, awaits, _)| phase.input(0).is_none() || awaits.is_some())
     }
 
+    /// Whether a batch may hold several steps: as for sending a step early, every phase of
+    /// every node that reads another node's data awaits it by step number; or a node runs
+    /// alone, and nobody else publishes.
+    pub(crate) fn can_hold_steps(&self) -> bool {
+        self.per_node.len() == 1 || self.early.len() == self.per_node.len()
+    }
+
     /// Whether the batch of `step` went out early to some node.
     pub(crate) fn sent_early(&self, step: u64) -> bool {
         self.sent_early == Some(step)
@@ -236,20 +243,29 @@ impl Batches {
                 break;
             }
             if started.elapsed() > timeout {
+                // Which phases the silent nodes had; not which of them they were in.
                 let silent: Vec<String> = self
                     .per_node
                     .iter()
                     .filter(|(o, _)| replies[*o].is_none())
-                    .map(|(o, _)| format!("`{}`", nodes[*o].link.name()))
+                    .map(|(o, list)| {
+                        let phases: Vec<&str> = list.iter().map(|(p, _, _)| p.name()).collect();
+                        let name = nodes[*o].link.name();
+                        format!("`{name}` (phases {})", phases.join(", "))
+                    })
                     .collect();
                 let steps = if count == 1 {
                     format!("step {step}")
                 } else {
                     format!("steps {step} to {}", step + count - 1)
                 };
+                let other = if self.per_node.len() > 1 {
+                    " (one may be waiting for the other)"
+                } else {
+                    ""
+                };
                 return Err(at_first(fail(format!(
-                    "{steps}: node {} did not answer within {} s (one may be waiting for the \
-                     other)",
+                    "{steps}: node {} did not answer within {} s{other}",
                     silent.join(" and "),
                     timeout.as_secs_f64()
                 ))));
@@ -328,6 +344,7 @@ mod tests {
         );
         // Every phase that reads the other node's data awaits it: both batches go early.
         assert_eq!(b.early, vec![1, 0]);
+        assert!(b.can_hold_steps());
         let b = Batches::new(&spm[1..], &[0, 1, 0, 1], &names);
         assert_eq!(b.early, vec![0, 1]);
         let fpd = [FibreForces, FluidLatticeStep, FibreAdvance];
@@ -353,5 +370,9 @@ mod tests {
         // awaits nothing, so its node stays in step.
         let b = Batches::new(&[FluidPenalty, FibreVelocities], &[1, 0], &names);
         assert_eq!(b.early, Vec::<usize>::new());
+        assert!(!b.can_hold_steps());
+        // A fluid alone reads ports nobody publishes: nothing can change under it.
+        let b = Batches::new(&[FluidMomentumExchange, FluidPenalty], &[0, 0], &names[1..]);
+        assert!(b.can_hold_steps());
     }
 }

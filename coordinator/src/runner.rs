@@ -583,11 +583,12 @@ fn drive(
     let mut status = "completed";
     // Pipelined batches need nodes that can wait for each other's publications (processes)
     // and a fluid that already holds the bead states of the step: from the second step on.
-    let mut batches =
-        (!opts.in_process && !opts.lock_step && has_beads && nodes.len() > 1).then(|| {
-            let names: Vec<String> = nodes.iter().map(|n| n.link.name().to_string()).collect();
-            pipeline::Batches::new(&plan.schedule, &owner, &names)
-        });
+    // A node alone (a fluid without fibres, a fibre without fluid) waits for nothing; its
+    // batches save it a request and a reply per phase.
+    let mut batches = (!opts.in_process && !opts.lock_step).then(|| {
+        let names: Vec<String> = nodes.iter().map(|n| n.link.name().to_string()).collect();
+        pipeline::Batches::new(&plan.schedule, &owner, &names)
+    });
     st.pipelined = batches.is_some();
     let every = opts.checkpoint_interval;
     let rests = scene.scene.time.rest_tolerance.is_some();
@@ -610,7 +611,8 @@ fn drive(
                 // Several steps in one batch where the coordinator needs nothing in between;
                 // a single step may send the next one early (then that one is single too),
                 // unless the next is to be a batch of several.
-                let single = track || rests || INTERRUPTED.load(Ordering::SeqCst);
+                let single =
+                    track || rests || INTERRUPTED.load(Ordering::SeqCst) || !b.can_hold_steps();
                 let steps_from = |s| match single {
                     true => 1,
                     false => batch_steps(s, steps, interval, every, step_wall),
