@@ -171,6 +171,7 @@ impl Batches {
         (seconds, waiting): (&mut BTreeMap<String, f64>, &mut BTreeMap<String, f64>),
         timeout: Duration,
     ) -> Result<Vec<Vec<PhaseReport>>, (RunError, u64)> {
+        let count = count.max(1);
         let at_first = |e| (e, step);
         // A node that fails without saying where failed somewhere in the batch.
         let failed = |name: &str, e| {
@@ -187,7 +188,6 @@ impl Batches {
                 (e, step)
             }
         };
-        let count = count.max(1);
         let timeout = timeout.saturating_mul(u32::try_from(count).unwrap_or(u32::MAX));
         let sent_early = self.sent_early.take() == Some(step);
         for (o, _) in &self.per_node {
