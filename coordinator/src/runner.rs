@@ -613,9 +613,12 @@ fn drive(
                 // unless the next is to be a batch of several.
                 let single =
                     track || rests || INTERRUPTED.load(Ordering::SeqCst) || !b.can_hold_steps();
-                let steps_from = |s| match single {
-                    true => 1,
-                    false => batch_steps(s, steps, interval, every, step_wall),
+                let steps_from = |s| {
+                    if single {
+                        1
+                    } else {
+                        batch_steps(s, steps, interval, every, step_wall)
+                    }
                 };
                 let count = if b.sent_early(step) {
                     1

@@ -180,10 +180,11 @@ struct Batch<'a> {
 
 impl Batch<'_> {
     /// Run the phases in order, each once its input is there, for `steps` consecutive steps
-    /// from `first`; wake the node that waits for a phase's output. Returns the reply. If a request other than a batch comes while a
-    /// phase waits for its input, the coordinator has given up on this step (e.g. the other
-    /// node failed): the batch ends there with an error, the batches queued behind it are
-    /// answered with an error unserved, and that request is left in the queue.
+    /// from `first`; wake the node that waits for a phase's output. Returns the reply. If a
+    /// request other than a batch comes while a phase waits for its input, the coordinator
+    /// has given up on this step (e.g. the other node failed): the batch ends there with an
+    /// error, the batches queued behind it are answered with an error unserved, and that
+    /// request is left in the queue.
     fn run(
         &mut self,
         component: &mut dyn Component,
