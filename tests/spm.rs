@@ -206,7 +206,7 @@ fn jeffery_period_of_a_three_bead_chain_against_2d_stokes() {
     .collect();
     let s = run_in_process(&config("spm/jeffery_rigid.toml"), &o, "spm-jeffery-3");
     let (t, reference) = metric(&s, "tumbling_period_gamma");
-    let b = coordinator::reference::stokes_chain_2d::chain_bretherton(3).0;
+    let b = coordinator::reference::stokes_chain_2d::chain_bretherton(3);
     let stokes = coordinator::reference::stokes_chain_2d::period_gamma(b);
     assert_eq!(reference, stokes);
     println!("N_b = 3: gamma T = {t:.4}, 2D Stokes {stokes:.4}");

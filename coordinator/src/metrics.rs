@@ -80,7 +80,7 @@ fn stokes_2d_chain(ctx: &Context, beads: usize) -> Option<f64> {
     let length = lookup(ctx.derived, "fibre.0.length")?;
     let touching = (length - 2.0 * r * (beads as f64 - 1.0)).abs() <= 1e-9 * length;
     (ctx.scene.dimensions == 2 && (2..=MAX_STOKES_BEADS).contains(&beads) && touching)
-        .then(|| stokes::chain_bretherton(beads).0)
+        .then(|| stokes::chain_bretherton(beads))
 }
 
 /// `fibre.0.bead_radius` of the scene.
