@@ -206,17 +206,29 @@ impl Batches {
             }
             self.sent_early = Some(step + 1);
         }
-        // The node of the schedule's last phase answers last; the others are looked at
-        // without blocking while it runs.
+        // The node of the schedule's last phase usually answers last: block on it and look
+        // at the others without blocking. Once it has answered, block on one still silent:
+        // its reply may come later (it publishes its data before it answers, and the last
+        // node may finish in between), and looking without blocking would spin, taking the
+        // core the silent node needs.
         let last = *self.owner.last().expect("a schedule has phases");
         let mut replies: Vec<Option<Vec<cosim::TimedReport>>> = vec![None; nodes.len()];
         let started = Instant::now();
         loop {
+            let block_on = if replies[last].is_none() {
+                last
+            } else {
+                self.per_node
+                    .iter()
+                    .map(|(o, _)| *o)
+                    .find(|o| replies[*o].is_none())
+                    .unwrap_or(last)
+            };
             for (o, _) in &self.per_node {
                 if replies[*o].is_some() {
                     continue;
                 }
-                let limit = if *o == last {
+                let limit = if *o == block_on {
                     CHECK_OTHERS
                 } else {
                     Duration::ZERO
