@@ -42,7 +42,7 @@
 //! The spectral ψ̂ is the state; the real ψ is its inverse transform. Everything is allocated
 //! in [`CahnHilliard::new`]; a step allocates nothing.
 use crate::grid::{Grid, Wavenumbers};
-use crate::parallel::{for_each_row, per_row, GRAIN};
+use crate::parallel::{for_each_row, grain, per_row};
 use crate::transform::Transform;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -260,7 +260,7 @@ impl CahnHilliard {
         self.work
             .par_iter_mut()
             .zip(psi.par_iter().zip(phi.par_iter().zip(ps.par_iter())))
-            .with_min_len(GRAIN)
+            .with_min_len(grain())
             .for_each(|(w, (&p, (&f, &s)))| *w = bulk_derivative(p, f, s));
         self.transform.forward(&self.work, &mut self.g_hat);
     }
@@ -271,14 +271,14 @@ impl CahnHilliard {
         let nxh = g.nxh();
         self.adv_hat
             .par_iter_mut()
-            .with_min_len(GRAIN)
+            .with_min_len(grain())
             .for_each(|v| *v = Complex64::default());
         for (c, u) in velocity.iter().enumerate().take(g.dims) {
             let u = u.as_ref();
             self.work
                 .par_iter_mut()
                 .zip(u.par_iter().zip(self.psi.par_iter()))
-                .with_min_len(GRAIN)
+                .with_min_len(grain())
                 .for_each(|(w, (a, b))| *w = a * b);
             self.transform.forward(&self.work, &mut self.tmp_hat);
             let w = &self.waves;
@@ -431,7 +431,7 @@ impl CahnHilliard {
         self.mu_phi
             .par_iter_mut()
             .zip(psi.par_iter().zip(phi.par_iter().zip(ps.par_iter())))
-            .with_min_len(GRAIN)
+            .with_min_len(grain())
             .for_each(|(m, (&p, (&f, &s)))| *m = 3.0 * e0 * f * (p - s) * (p - s));
     }
 
@@ -463,7 +463,7 @@ impl CahnHilliard {
             let work = &self.work;
             o.par_iter_mut()
                 .zip(weight.par_iter().zip(work.par_iter()))
-                .with_min_len(GRAIN)
+                .with_min_len(grain())
                 .for_each(|(f, (a, d))| {
                     if use_phi {
                         *f -= a * d;

@@ -15,6 +15,7 @@
 //! force with ψⁿ⁺¹ and φⁿ⁺¹ to uⁿ -> u* (L2020 eq. 34; [`crate::binary_fluid`]).
 use crate::binary_fluid::BinaryFluid;
 use crate::config::{parse_scene, FluidConfig, InitialVelocity};
+use crate::grain_tuner::GrainTuner;
 use crate::grid::Grid;
 use crate::spectral_ns::SpectralNs;
 use crate::spm::Spm;
@@ -62,6 +63,12 @@ pub struct FluidComponent {
     run: Option<Run>,
     /// `fluid.method = "fpd-lbm"`: the FPD lattice instead of the SPM solver.
     fpd: Option<crate::fpd_lbm::FpdRun>,
+    /// Chooses the parallel grain from the time of the steps (grain_tuner.rs).
+    tuner: Option<GrainTuner>,
+    /// A grain set with [`FluidComponent::fix_grain`], kept instead of tuning.
+    fixed_grain: Option<usize>,
+    /// Time spent in this step's phases so far (s).
+    step_seconds: f64,
 }
 
 struct Run {
@@ -97,6 +104,158 @@ struct StateHeader {
 impl FluidComponent {
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Run every phase with the parallel grain `elements` (elements per rayon task) instead of
+    /// choosing it from the time of the steps: for benchmarks that compare builds, and for
+    /// the test that the grain changes no result. Also after a later `configure`.
+    pub fn fix_grain(&mut self, elements: usize) {
+        self.fixed_grain = Some(elements.max(1));
+        self.tuner = None;
+    }
+
+    /// Tune the grain for a grid of `rows` rows of `row_len` elements, from its default
+    /// (unless [`FluidComponent::fix_grain`] fixed it).
+    fn start_tuner(&mut self, rows: usize, row_len: usize) {
+        if self.fixed_grain.is_some() {
+            return;
+        }
+        let tuner = GrainTuner::new(rows, row_len);
+        crate::parallel::set_grain(tuner.grain());
+        self.tuner = Some(tuner);
+    }
+
+    /// [`Component::run_phase`] without the timing the grain tuner uses.
+    fn run_phase_untimed(
+        &mut self,
+        step: u64,
+        phase: Phase,
+        exchange: &mut dyn Exchange,
+    ) -> Result<PhaseReport, ComponentError> {
+        if let Some(fpd) = self.fpd.as_mut() {
+            return match phase {
+                Phase::FluidLatticeStep => fpd.lattice_step(step, exchange),
+                other => Err(ComponentError(format!(
+                    "fluid-node: phase {other} does not belong to fluid.method = \"fpd-lbm\" \
+                     (it runs fluid-lattice-step)"
+                ))),
+            };
+        }
+        let run = self.run_mut()?;
+        let has_beads = run.total_beads > 0;
+        match phase {
+            Phase::FluidPhaseField => {
+                let no_binary = || {
+                    ComponentError(
+                        "fluid-node: fluid-phase-field needs a binary fluid ([fluid.binary])"
+                            .into(),
+                    )
+                };
+                if run.binary.is_none() {
+                    return Err(no_binary());
+                }
+                if let Some(p) = run.pending {
+                    return Err(ComponentError(format!(
+                        "fluid-node: fluid-phase-field of step {step} requested while the \
+                         penalty of step {p} is still pending"
+                    )));
+                }
+                // The states of step n are those the penalty of step n - 1 read. Read them
+                // only if not held: in a pipelined run the fibre node may publish those of
+                // step n + 1 meanwhile (coordinator/src/pipeline.rs).
+                if has_beads && run.states_step != Some(step) {
+                    run.read_states(step, phase, exchange)?;
+                }
+                let (spm, ns) = (&run.spm, &run.ns);
+                let Some(b) = run.binary.as_mut() else {
+                    return Err(no_binary());
+                };
+                b.phase_field_step(spm, ns.velocity_components())
+                    .map_err(|e| ComponentError(format!("{e} (at step {step})")))?;
+                run.psi_step = Some(step);
+                Ok(PhaseReport {
+                    diagnostics: b.report(spm, step),
+                })
+            }
+            Phase::FluidMomentumExchange => {
+                if let Some(p) = run.pending {
+                    return Err(ComponentError(format!(
+                        "fluid-node: fluid-momentum-exchange of step {step} requested while \
+                         the penalty of step {p} is still pending"
+                    )));
+                }
+                if run.binary.is_some() && run.psi_step != Some(step) {
+                    return Err(ComponentError(format!(
+                        "fluid-node: fluid-momentum-exchange of step {step} requested before \
+                         fluid-phase-field of step {step} (a binary fluid runs it first)"
+                    )));
+                }
+                if has_beads {
+                    run.read_states(step, phase, exchange)?;
+                }
+                if let Some(b) = run.binary.as_mut() {
+                    // Eq. 34's capillary terms with psi^{n+1} and phi^{n+1}.
+                    b.load_capillary_force(&run.spm, &mut run.ns, run.cfg.density)
+                        .map_err(ComponentError)?;
+                }
+                // Eq. 34: u^n -> u*.
+                run.ns.advance_intermediate();
+                let mut total = [0.0; 3];
+                if has_beads {
+                    // Eqs. 35-36.
+                    run.spm
+                        .impulses(run.ns.velocity_components(), &run.states, &mut run.impulses);
+                    for (i, j) in run.impulses.iter().enumerate() {
+                        if j.impulse
+                            .iter()
+                            .chain(&j.angular_impulse)
+                            .any(|v| !v.is_finite())
+                        {
+                            return Err(ComponentError(format!(
+                                "fluid-node: the impulse on bead {i} is not finite at step \
+                                 {step}: the flow or the bead velocities blew up"
+                            )));
+                        }
+                        for (t, v) in total.iter_mut().zip(j.impulse) {
+                            *t += v;
+                        }
+                    }
+                    exchange.publish_impulses(Port::BeadImpulses, step + 1, &run.impulses)?;
+                }
+                run.pending = Some(step);
+                let values = [run.spm.bead_volume(), total[0], total[1], total[2]];
+                Ok(PhaseReport {
+                    diagnostics: EXCHANGE_DIAGNOSTICS
+                        .iter()
+                        .zip(values)
+                        .map(|(n, v)| (n.to_string(), v))
+                        .collect(),
+                })
+            }
+            Phase::FluidPenalty => {
+                if run.pending != Some(step) {
+                    return Err(ComponentError(format!(
+                        "fluid-node: fluid-penalty of step {step} requested before \
+                         fluid-momentum-exchange of step {step}"
+                    )));
+                }
+                if has_beads {
+                    run.read_states(step, phase, exchange)?;
+                }
+                if run.spm.has_solids() {
+                    // Eqs. 37-38.
+                    let (spm, states) = (&run.spm, &run.states);
+                    run.ns
+                        .add_projected(|c, u_c, out| spm.penalty(c, u_c, states, out));
+                }
+                run.pending = None;
+                run.report(step)
+            }
+            other => Err(ComponentError(format!(
+                "fluid-node: phase {other} does not belong to fluid.method = \"spm\" (it \
+                 serves fluid-phase-field, fluid-momentum-exchange and fluid-penalty)"
+            ))),
+        }
     }
 
     /// The grid (`None` before `configure`).
@@ -358,6 +517,8 @@ impl Component for FluidComponent {
     ) -> Result<Configured, ComponentError> {
         self.run = None;
         self.fpd = None;
+        self.tuner = None;
+        self.step_seconds = 0.0;
         let table = cosim::scene_keys::parse_table(scene_toml).map_err(ComponentError)?;
         let method = table
             .get("fluid")
@@ -365,12 +526,14 @@ impl Component for FluidComponent {
             .and_then(|m| m.as_str());
         if method == Some("fpd-lbm") {
             let (run, configured) = crate::fpd_lbm::FpdRun::configure(scene_toml)?;
+            self.start_tuner(run.scene.ny, run.scene.nx);
             self.fpd = Some(run);
             return Ok(configured);
         }
         let cfg = parse_scene(scene_toml).map_err(ComponentError)?;
         let mut limits = stability::check(&cfg).map_err(ComponentError)?;
         let grid = Grid::new(cfg.dimensions, cfg.grid);
+        self.start_tuner(grid.rows(), grid.nx);
         let nu = cfg.kinematic_viscosity();
         let accel = cfg.body_force.map(|f| f / cfg.density);
         let mut ns = SpectralNs::new(grid, nu, cfg.dt, accel);
@@ -506,130 +669,21 @@ impl Component for FluidComponent {
         phase: Phase,
         exchange: &mut dyn Exchange,
     ) -> Result<PhaseReport, ComponentError> {
-        if let Some(fpd) = self.fpd.as_mut() {
-            return match phase {
-                Phase::FluidLatticeStep => fpd.lattice_step(step, exchange),
-                other => Err(ComponentError(format!(
-                    "fluid-node: phase {other} does not belong to fluid.method = \"fpd-lbm\" \
-                     (it runs fluid-lattice-step)"
-                ))),
-            };
+        if let Some(g) = self.fixed_grain {
+            crate::parallel::set_grain(g);
         }
-        let run = self.run_mut()?;
-        let has_beads = run.total_beads > 0;
-        match phase {
-            Phase::FluidPhaseField => {
-                let no_binary = || {
-                    ComponentError(
-                        "fluid-node: fluid-phase-field needs a binary fluid ([fluid.binary])"
-                            .into(),
-                    )
-                };
-                if run.binary.is_none() {
-                    return Err(no_binary());
-                }
-                if let Some(p) = run.pending {
-                    return Err(ComponentError(format!(
-                        "fluid-node: fluid-phase-field of step {step} requested while the \
-                         penalty of step {p} is still pending"
-                    )));
-                }
-                // The states of step n are those the penalty of step n - 1 read. Read them
-                // only if not held: in a pipelined run the fibre node may publish those of
-                // step n + 1 meanwhile (coordinator/src/pipeline.rs).
-                if has_beads && run.states_step != Some(step) {
-                    run.read_states(step, phase, exchange)?;
-                }
-                let (spm, ns) = (&run.spm, &run.ns);
-                let Some(b) = run.binary.as_mut() else {
-                    return Err(no_binary());
-                };
-                b.phase_field_step(spm, ns.velocity_components())
-                    .map_err(|e| ComponentError(format!("{e} (at step {step})")))?;
-                run.psi_step = Some(step);
-                Ok(PhaseReport {
-                    diagnostics: b.report(spm, step),
-                })
+        let started = std::time::Instant::now();
+        let report = self.run_phase_untimed(step, phase, exchange);
+        self.step_seconds += started.elapsed().as_secs_f64();
+        // The step's last phase: the penalty (SPM) or the lattice step (FPD).
+        if matches!(phase, Phase::FluidPenalty | Phase::FluidLatticeStep) {
+            if let Some(t) = self.tuner.as_mut() {
+                t.end_step(self.step_seconds);
+                crate::parallel::set_grain(t.grain());
             }
-            Phase::FluidMomentumExchange => {
-                if let Some(p) = run.pending {
-                    return Err(ComponentError(format!(
-                        "fluid-node: fluid-momentum-exchange of step {step} requested while \
-                         the penalty of step {p} is still pending"
-                    )));
-                }
-                if run.binary.is_some() && run.psi_step != Some(step) {
-                    return Err(ComponentError(format!(
-                        "fluid-node: fluid-momentum-exchange of step {step} requested before \
-                         fluid-phase-field of step {step} (a binary fluid runs it first)"
-                    )));
-                }
-                if has_beads {
-                    run.read_states(step, phase, exchange)?;
-                }
-                if let Some(b) = run.binary.as_mut() {
-                    // Eq. 34's capillary terms with psi^{n+1} and phi^{n+1}.
-                    b.load_capillary_force(&run.spm, &mut run.ns, run.cfg.density)
-                        .map_err(ComponentError)?;
-                }
-                // Eq. 34: u^n -> u*.
-                run.ns.advance_intermediate();
-                let mut total = [0.0; 3];
-                if has_beads {
-                    // Eqs. 35-36.
-                    run.spm
-                        .impulses(run.ns.velocity_components(), &run.states, &mut run.impulses);
-                    for (i, j) in run.impulses.iter().enumerate() {
-                        if j.impulse
-                            .iter()
-                            .chain(&j.angular_impulse)
-                            .any(|v| !v.is_finite())
-                        {
-                            return Err(ComponentError(format!(
-                                "fluid-node: the impulse on bead {i} is not finite at step \
-                                 {step}: the flow or the bead velocities blew up"
-                            )));
-                        }
-                        for (t, v) in total.iter_mut().zip(j.impulse) {
-                            *t += v;
-                        }
-                    }
-                    exchange.publish_impulses(Port::BeadImpulses, step + 1, &run.impulses)?;
-                }
-                run.pending = Some(step);
-                let values = [run.spm.bead_volume(), total[0], total[1], total[2]];
-                Ok(PhaseReport {
-                    diagnostics: EXCHANGE_DIAGNOSTICS
-                        .iter()
-                        .zip(values)
-                        .map(|(n, v)| (n.to_string(), v))
-                        .collect(),
-                })
-            }
-            Phase::FluidPenalty => {
-                if run.pending != Some(step) {
-                    return Err(ComponentError(format!(
-                        "fluid-node: fluid-penalty of step {step} requested before \
-                         fluid-momentum-exchange of step {step}"
-                    )));
-                }
-                if has_beads {
-                    run.read_states(step, phase, exchange)?;
-                }
-                if run.spm.has_solids() {
-                    // Eqs. 37-38.
-                    let (spm, states) = (&run.spm, &run.states);
-                    run.ns
-                        .add_projected(|c, u_c, out| spm.penalty(c, u_c, states, out));
-                }
-                run.pending = None;
-                run.report(step)
-            }
-            other => Err(ComponentError(format!(
-                "fluid-node: phase {other} does not belong to fluid.method = \"spm\" (it \
-                 serves fluid-phase-field, fluid-momentum-exchange and fluid-penalty)"
-            ))),
+            self.step_seconds = 0.0;
         }
+        report
     }
 
     fn save_state(&self) -> Result<Vec<u8>, ComponentError> {

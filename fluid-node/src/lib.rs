@@ -23,6 +23,7 @@ pub mod component;
 pub mod config;
 pub mod fpd;
 pub mod fpd_lbm;
+pub mod grain_tuner;
 pub mod grid;
 pub mod mrt_d2q9;
 pub mod parallel;

@@ -4,19 +4,35 @@
 //! depend on how rayon splits the work or on the number of threads.
 use crate::transform::SharedPtr;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Most fields one [`for_each_row`] call can hand out.
 pub const MAX_FIELDS: usize = 4;
 
 /// Elements below which splitting work across threads costs more than it saves (a rayon
-/// task costs microseconds; a small grid's whole step is a few hundred microseconds).
+/// task costs microseconds; a small grid's whole step is a few hundred microseconds): the
+/// default, which [`crate::grain_tuner`] may change at run time ([`set_grain`]).
 pub const GRAIN: usize = 16_384;
 
-/// Minimum rows of `row_len` elements per rayon task: at least [`GRAIN`] elements, and few
+/// The grain in use; process-wide, since it decides only how rows are shared among threads,
+/// never a result (reductions go through per-row partial results).
+static GRAIN_NOW: AtomicUsize = AtomicUsize::new(GRAIN);
+
+/// Elements a rayon task gets at least: [`GRAIN`] unless [`set_grain`] changed it.
+pub fn grain() -> usize {
+    GRAIN_NOW.load(Ordering::Relaxed)
+}
+
+/// Change [`grain`] for every loop started from now on (at least 1).
+pub fn set_grain(elements: usize) {
+    GRAIN_NOW.store(elements.max(1), Ordering::Relaxed);
+}
+
+/// Minimum rows of `row_len` elements per rayon task: at least [`grain`] elements, and few
 /// enough tasks (eight per thread) to balance.
 pub fn min_len(rows: usize, row_len: usize) -> usize {
     (rows / (8 * rayon::current_num_threads().max(1)))
-        .max(GRAIN.div_ceil(row_len.max(1)))
+        .max(grain().div_ceil(row_len.max(1)))
         .max(1)
 }
 

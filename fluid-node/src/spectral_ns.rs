@@ -22,7 +22,7 @@
 //! The spectral velocity `û` is the state; the real velocity is always the inverse transform
 //! of `û` (a deterministic function of it), so saving `û` saves everything.
 use crate::grid::{Grid, Wavenumbers};
-use crate::parallel::{for_each_row, ordered_sum, per_row, GRAIN};
+use crate::parallel::{for_each_row, grain, ordered_sum, per_row};
 use crate::transform::Transform;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -124,7 +124,7 @@ impl SpectralNs {
             self.transform.forward(fc, &mut self.force_hat[c]);
             self.force_hat[c]
                 .par_iter_mut()
-                .with_min_len(GRAIN)
+                .with_min_len(grain())
                 .for_each(|v| *v *= inv_rho);
         }
         Ok(())
@@ -217,7 +217,7 @@ impl SpectralNs {
         let d = g.dims;
         for h in self.nl_hat.iter_mut() {
             h.par_iter_mut()
-                .with_min_len(GRAIN)
+                .with_min_len(grain())
                 .for_each(|v| *v = Complex64::default());
         }
         for a in 0..d {
@@ -227,7 +227,7 @@ impl SpectralNs {
                     self.scratch
                         .par_iter_mut()
                         .zip(ua.par_iter().zip(ub.par_iter()))
-                        .with_min_len(GRAIN)
+                        .with_min_len(grain())
                         .for_each(|(p, (x, y))| *p = x * y);
                 }
                 self.transform.forward(&self.scratch, &mut self.tmp_hat);

@@ -12,7 +12,7 @@
 //! exchange, n+1 in the penalty). In 2D only x, y of X and V and the z component of Omega
 //! are used; the angular impulse is along z.
 use crate::grid::Grid;
-use crate::parallel::{min_len, GRAIN};
+use crate::parallel::{grain, min_len};
 use crate::smoothed_profile::BeadProfile;
 use crate::walls::Walls;
 use cosim::{BeadImpulse, BeadState};
@@ -228,7 +228,7 @@ impl Spm {
                 }),
             None => out
                 .par_iter_mut()
-                .with_min_len(GRAIN)
+                .with_min_len(grain())
                 .for_each(|v| *v = 0.0),
         }
         for (b, s) in self.beads.iter().zip(states) {

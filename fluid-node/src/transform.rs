@@ -13,7 +13,7 @@
 //! allocates nothing. Every line is transformed by the same plan whatever the split, so the
 //! result does not depend on the number of threads.
 use crate::grid::Grid;
-use crate::parallel::GRAIN;
+use crate::parallel::grain;
 use rayon::prelude::*;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex64;
@@ -57,6 +57,8 @@ pub struct Transform {
     fy: [Arc<dyn Fft<f64>>; 2],
     fz: Option<[Arc<dyn Fft<f64>>; 2]>,
     workspaces: Vec<Workspace>,
+    /// Whether the number of workspaces in use follows [`grain`] (else all are used).
+    tuned: bool,
     /// Intermediate spectrum of the inverse transform (the input is left untouched).
     work: Vec<Complex64>,
 }
@@ -74,8 +76,8 @@ struct Columns {
 
 impl Transform {
     /// Plan the transforms of `grid` and allocate workspaces for `groups` parallel tasks
-    /// (`0`: four per rayon thread, fewer for small grids so that a task has at least
-    /// [`GRAIN`] values).
+    /// (`0`: four per rayon thread, of which a transform uses fewer on small grids, so that a
+    /// task has at least [`grain`] values at the time).
     pub fn new(grid: Grid, groups: usize) -> Self {
         let mut rp = RealFftPlanner::<f64>::new();
         let r2c = rp.plan_fft_forward(grid.nx);
@@ -88,10 +90,9 @@ impl Transform {
         for f in fy.iter().chain(fz.iter().flatten()) {
             scratch = scratch.max(f.get_inplace_scratch_len());
         }
-        let groups = if groups == 0 {
-            (4 * rayon::current_num_threads().max(1))
-                .min(grid.cells().div_ceil(GRAIN))
-                .max(1)
+        let tuned = groups == 0;
+        let groups = if tuned {
+            4 * rayon::current_num_threads().max(1)
         } else {
             groups
         };
@@ -112,12 +113,27 @@ impl Transform {
             fy,
             fz,
             workspaces,
+            tuned,
             work: vec![Complex64::default(); grid.modes()],
         }
     }
 
     pub fn grid(&self) -> Grid {
         self.grid
+    }
+
+    /// Workspaces (parallel tasks) a transform uses now: all of them, or on a small grid as
+    /// many as give each at least [`grain`] values. Which lines a task gets never changes a
+    /// line's transform.
+    fn active(&self) -> usize {
+        if self.tuned {
+            self.workspaces
+                .len()
+                .min(self.grid.cells().div_ceil(grain()))
+                .max(1)
+        } else {
+            self.workspaces.len()
+        }
     }
 
     fn y_columns(&self) -> Columns {
@@ -190,11 +206,12 @@ impl Transform {
         assert_eq!(spec.len(), g.modes());
         let (nx, nxh) = (g.nx, g.nxh());
         let rows = g.rows();
-        let per = rows.div_ceil(self.workspaces.len());
+        let active = self.active();
+        let per = rows.div_ceil(active);
         let r2c = &self.r2c;
         spec.par_chunks_mut(per * nxh)
             .zip(real.par_chunks(per * nx))
-            .zip(self.workspaces.par_iter_mut())
+            .zip(self.workspaces[..active].par_iter_mut())
             .for_each(|((s, r), ws)| {
                 for (srow, rrow) in s.chunks_exact_mut(nxh).zip(r.chunks_exact(nx)) {
                     ws.row.copy_from_slice(rrow);
@@ -206,9 +223,9 @@ impl Transform {
         let (ycols, zcols) = (self.y_columns(), self.z_columns());
         // SAFETY: `spec` has the grid's size (asserted above) and is exclusively borrowed.
         unsafe {
-            Self::columns(&mut self.workspaces, &*self.fy[0], p, p, ycols);
+            Self::columns(&mut self.workspaces[..active], &*self.fy[0], p, p, ycols);
             if let Some(fz) = &self.fz {
-                Self::columns(&mut self.workspaces, &*fz[0], p, p, zcols);
+                Self::columns(&mut self.workspaces[..active], &*fz[0], p, p, zcols);
             }
         }
     }
@@ -223,24 +240,26 @@ impl Transform {
         let src = SharedPtr(spec.as_ptr() as *mut Complex64);
         let w = SharedPtr(self.work.as_mut_ptr());
         let (ycols, zcols) = (self.y_columns(), self.z_columns());
+        let active = self.active();
+        let ws = &mut self.workspaces[..active];
         // SAFETY: sizes asserted above; `src` is only read, `work` is owned by self.
         unsafe {
             if let Some(fz) = &self.fz {
-                Self::columns(&mut self.workspaces, &*fz[1], src, w, zcols);
-                Self::columns(&mut self.workspaces, &*self.fy[1], w, w, ycols);
+                Self::columns(ws, &*fz[1], src, w, zcols);
+                Self::columns(ws, &*self.fy[1], w, w, ycols);
             } else {
-                Self::columns(&mut self.workspaces, &*self.fy[1], src, w, ycols);
+                Self::columns(ws, &*self.fy[1], src, w, ycols);
             }
         }
         let (nx, nxh) = (g.nx, g.nxh());
         let scale = 1.0 / g.cells() as f64;
-        let per = g.rows().div_ceil(self.workspaces.len());
+        let per = g.rows().div_ceil(active);
         let c2r = &self.c2r;
         let even = nx % 2 == 0;
         self.work
             .par_chunks_mut(per * nxh)
             .zip(real.par_chunks_mut(per * nx))
-            .zip(self.workspaces.par_iter_mut())
+            .zip(self.workspaces[..active].par_iter_mut())
             .for_each(|((s, r), ws)| {
                 for (srow, rrow) in s.chunks_exact_mut(nxh).zip(r.chunks_exact_mut(nx)) {
                     srow[0].im = 0.0;

@@ -1,6 +1,6 @@
 //! The discrete free energy (L2020 eqs. 27–30): total by term and density per node.
 use super::{CahnHilliard, CahnHilliardError};
-use crate::parallel::{for_each_row, ordered_sum, per_row, GRAIN};
+use crate::parallel::{for_each_row, grain, ordered_sum, per_row};
 use rayon::prelude::*;
 
 /// The free energy split by term, in units of e0 × volume (cell volume 1).
@@ -75,7 +75,7 @@ impl CahnHilliard {
             let (psi, phi, ps) = (&self.psi, &self.phi, &self.psi_star);
             out.par_iter_mut()
                 .enumerate()
-                .with_min_len(GRAIN)
+                .with_min_len(grain())
                 .for_each(|(i, o)| {
                     let p = psi[i];
                     *o = e0
@@ -88,7 +88,7 @@ impl CahnHilliard {
             let work = &self.work;
             out.par_iter_mut()
                 .zip(work.par_iter())
-                .with_min_len(GRAIN)
+                .with_min_len(grain())
                 .for_each(|(o, d)| *o += 0.5 * e0 * xi2 * d * d);
         }
         Ok(())

@@ -11,7 +11,7 @@
 //! uniform, F = 0, P_s is uniform and `Δp = Δ(ψ μ0 - e0 f_bulk) ≈ μ0 Δψ` (f_bulk is second
 //! order in the bulk shift of ψ).
 use super::{times_ik, CahnHilliard, CahnHilliardError};
-use crate::parallel::GRAIN;
+use crate::parallel::grain;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
@@ -32,7 +32,7 @@ impl CahnHilliard {
         // P̂_s = -i k·F̂ / k², accumulated in adv_hat (its k = 0 mode stays 0).
         self.adv_hat
             .par_iter_mut()
-            .with_min_len(GRAIN)
+            .with_min_len(grain())
             .for_each(|v| *v = Complex64::default());
         for (c, f) in force.iter_mut().enumerate().take(g.dims) {
             self.transform.forward(f.as_mut(), &mut self.tmp_hat);
@@ -62,7 +62,7 @@ impl CahnHilliard {
             out.par_iter_mut()
                 .zip(density.par_iter())
                 .enumerate()
-                .with_min_len(GRAIN)
+                .with_min_len(grain())
                 .for_each(|(i, (o, f))| {
                     let d = psi[i] - ps[i];
                     // ψ μ_ψ + φ μ_φ - e0 f, with φ μ_φ = 3 e0 φ² (ψ - ψ*)².
