@@ -2,60 +2,8 @@
 //! save/restore and determinism.
 mod common;
 use common::*;
-use cosim::{BeadState, Component, Exchange, InProcessExchange, Phase, Port};
+use cosim::{Component, Exchange, InProcessExchange, Phase, Port};
 use fluid_node::{FluidComponent, COUETTE_DIAGNOSTIC, DIAGNOSTICS, EXCHANGE_DIAGNOSTICS};
-
-const FIBRE_SCENE: &str = r#"
-dimensions = 2
-[time]
-dt = 0.5
-steps = 10
-[fluid]
-method = "spm"
-grid = [48, 40]
-viscosity = 1.0
-[walls]
-velocity = [-0.02, 0.02]
-[[fibre]]
-model = "cohesive-beam"
-beads = 3
-bead_radius = 3
-youngs_modulus = 100
-clamp = [0]
-"#;
-
-fn fibre_states(n: u64, v: f64) -> Vec<BeadState> {
-    (0..3)
-        .map(|i| BeadState {
-            position: [14.0 + 6.0 * i as f64 + 0.01 * n as f64, 20.0, 0.0],
-            orientation: [1.0, 0.0, 0.0, 0.0],
-            velocity: [0.01 + v, 0.002 * i as f64, 0.0],
-            angular_velocity: [0.0, 0.0, 0.001],
-        })
-        .collect()
-}
-
-/// Run `steps` coupled-like steps from `from`; return the bits of the velocity and of every
-/// impulse and diagnostic.
-fn run(c: &mut FluidComponent, x: &mut InProcessExchange, from: u64, steps: u64) -> Vec<u64> {
-    let mut bits = Vec::new();
-    for n in from..from + steps {
-        let (imp, rep) = bead_step(c, x, n, &fibre_states(n, 0.0), &fibre_states(n, 1e-3));
-        for j in imp {
-            bits.extend(
-                j.impulse
-                    .iter()
-                    .chain(&j.angular_impulse)
-                    .map(|v| v.to_bits()),
-            );
-        }
-        bits.extend(rep.diagnostics.iter().map(|(_, v)| v.to_bits()));
-    }
-    for comp in c.velocity() {
-        bits.extend(comp.iter().map(|v| v.to_bits()));
-    }
-    bits
-}
 
 #[test]
 fn description_names_the_contract() {

@@ -2,6 +2,8 @@
 //! force spread and the velocity average, momentum balance, the internal flow of eq. 15, and
 //! the hydrodynamic radius of a bead against the Sangani–Acrivos drag of a square array of
 //! cylinders (REFERENCE.md section 2). Lattice units throughout (dx = dt = 1).
+mod common;
+use common::fpd_chain_run;
 use fluid_node::fpd::{FpdConfig, FpdCoupling, FpdError};
 use fluid_node::mrt_d2q9::{MrtConfig, MrtD2q9, YBoundary};
 use std::cell::Cell;
@@ -492,23 +494,7 @@ fn coupled_steps_do_not_depend_on_threads() {
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| {
-            let mut lat = channel(64, 640, 0.1, -0.01, 0.01);
-            let mut c = FpdCoupling::new(FpdConfig::new(4.0, 0.1), &mut lat, 3).unwrap();
-            let mut pos = [[10.0, 100.0], [18.0, 100.5], [26.0, 101.0]];
-            let forces = [[1e-4, 0.0], [0.0, 0.0], [-1e-4, 0.0]];
-            let mut v = [[0.0; 2]; 3];
-            for _ in 0..30 {
-                c.apply(&mut lat, &pos, &forces).unwrap();
-                lat.step();
-                c.bead_velocities(&lat, &mut v).unwrap();
-                for (p, w) in pos.iter_mut().zip(&v) {
-                    p[0] += 50.0 * w[0];
-                    p[1] += 50.0 * w[1];
-                }
-            }
-            (pos, v)
-        })
+        pool.install(fpd_chain_run)
     };
     let (one, three) = (run(1), run(3));
     assert_eq!(one, three);
