@@ -106,7 +106,7 @@ impl GrainTuner {
                 if self.samples.len() < TRIAL_STEPS {
                     return;
                 }
-                self.samples.sort_by(f64::total_cmp);
+                self.samples.sort_unstable_by(f64::total_cmp);
                 self.medians[k] = self.samples[TRIAL_STEPS / 2];
                 self.samples.clear();
                 if k + 1 < self.candidates.len() {
