@@ -59,8 +59,8 @@ impl GrainTuner {
         let mut candidates: Vec<usize> = Vec::with_capacity(CANDIDATES.len());
         if threads > 1 {
             for g in CANDIDATES {
-                // A candidate that leaves the whole grid to one task behaves like the
-                // default, and one that splits it like an earlier candidate adds nothing.
+                // One that splits a whole-grid loop into as many tasks as an earlier
+                // candidate adds nothing to try.
                 let tasks = rows.div_ceil(split(g));
                 let same = candidates.iter().any(|&c| rows.div_ceil(split(c)) == tasks);
                 if !same {
