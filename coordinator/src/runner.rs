@@ -591,6 +591,14 @@ fn drive(
     });
     st.pipelined = batches.is_some();
     let every = opts.checkpoint_interval;
+    let mut snapshots = crate::field_snapshots::Snapshots::new(&opts.out, scene.fields_interval());
+    let fields_every = snapshots.as_ref().map_or(0, |s| s.every());
+    if let Some(snap) = snapshots.as_mut() {
+        match &resumed {
+            Some(_) => snap.keep_earlier(st.time),
+            None => snap.write(first_step, st.time, nodes, &beads, &radii, &states)?,
+        }
+    }
     let rests = scene.scene.time.rest_tolerance.is_some();
     // Reports of the steps the nodes ran ahead of the loop in a multi-step batch, and the wall
     // time of one step of the last batch (how many steps the next may hold).
@@ -603,6 +611,7 @@ fn drive(
         let send_next = step + 1 < steps
             && !rests
             && (every == 0 || (step + 1) % every != 0)
+            && (fields_every == 0 || (step + 1) % fields_every != 0)
             && !INTERRUPTED.load(Ordering::SeqCst);
         let mut next_sent = false;
         let reports = match &mut batches {
@@ -617,7 +626,7 @@ fn drive(
                     if single {
                         1
                     } else {
-                        batch_steps(s, steps, interval, every, step_wall)
+                        batch_steps(s, steps, interval, [every, fields_every], step_wall)
                     }
                 };
                 let count = if b.sent_early(step) {
@@ -709,6 +718,18 @@ fn drive(
                 .map_err(fail)?;
             log.flush().map_err(fail)?;
         }
+        if let Some(snap) = snapshots.as_mut() {
+            if snap.due(step + 1, step + 1 == steps || at_rest || stop) {
+                if has_beads {
+                    exchange
+                        .read_states_of_step(Port::BeadStates, step + 1, &mut states)
+                        .map_err(|e| {
+                            fail(format!("reading bead states at step {}: {e}", step + 1))
+                        })?;
+                }
+                snap.write(step + 1, st.time, nodes, &beads, &radii, &states)?;
+            }
+        }
         bar.inc(1);
         if every > 0 && ((step + 1) % every == 0 || step + 1 == steps || stop) {
             let run = crate::checkpoint::RunCheckpoint::new(
@@ -731,6 +752,9 @@ fn drive(
         }
     }
     bar.finish_and_clear();
+    if let Some(snap) = &snapshots {
+        st.files.extend(snap.files());
+    }
     if has_beads {
         exchange
             .read_states(Port::BeadStates, &mut states)
@@ -784,12 +808,18 @@ const BATCH_SECONDS: f64 = 0.05;
 const MAX_BATCH_STEPS: u64 = 64;
 
 /// How many steps from `step` the nodes may run in one batch ([`pipeline::Batches::run_steps`]):
-/// up to the next step whose end the coordinator logs (`interval`) or checkpoints (`every`, 0
-/// for never), the last step, and [`BATCH_SECONDS`] of wall time at `step_wall` seconds a step
+/// up to the next step whose end the coordinator logs (`interval`) or checkpoints or
+/// snapshots (`every`: those intervals, 0 for never), the last step, and [`BATCH_SECONDS`] of wall time at `step_wall` seconds a step
 /// (one step while that is unknown). Each batch saves the coordinator a request and a reply
 /// to each node per step, the system calls and wake-ups of which take a core from the nodes'
 /// threads on a small machine.
-fn batch_steps(step: u64, steps: u64, interval: u64, every: u64, step_wall: Option<f64>) -> u64 {
+fn batch_steps(
+    step: u64,
+    steps: u64,
+    interval: u64,
+    every: [u64; 2],
+    step_wall: Option<f64>,
+) -> u64 {
     let Some(wall) = step_wall else {
         return 1;
     };
@@ -804,7 +834,8 @@ fn batch_steps(step: u64, steps: u64, interval: u64, every: u64, step_wall: Opti
     };
     by_time
         .min(until(interval.max(1)))
-        .min(until(every))
+        .min(until(every[0]))
+        .min(until(every[1]))
         .min(steps.saturating_sub(step))
         .max(1)
 }
@@ -930,19 +961,24 @@ fn progress_bar(show: bool, steps: u64) -> indicatif::ProgressBar {
 mod tests {
     use super::*;
 
-    /// A batch ends at the next logged step, checkpoint or the last step, holds about
+    /// A batch ends at the next logged step, checkpoint, snapshot or the last step, holds about
     /// BATCH_SECONDS of steps, and is one step while the step's wall time is unknown.
     #[test]
     fn batches_end_where_the_coordinator_needs_the_nodes() {
         let ms = Some(1e-3);
-        assert_eq!(batch_steps(3, 1000, 500, 0, None), 1);
-        assert_eq!(batch_steps(3, 1000, 500, 0, ms), 50);
-        assert_eq!(batch_steps(490, 1000, 500, 0, ms), 10);
-        assert_eq!(batch_steps(499, 1000, 500, 0, ms), 1);
-        assert_eq!(batch_steps(500, 1000, 500, 0, Some(1e-6)), MAX_BATCH_STEPS);
-        assert_eq!(batch_steps(95, 1000, 500, 100, ms), 5);
-        assert_eq!(batch_steps(998, 1000, 500, 0, ms), 2);
-        assert_eq!(batch_steps(10, 1000, 1, 0, ms), 1);
-        assert_eq!(batch_steps(10, 1000, 500, 0, Some(0.09)), 1);
+        assert_eq!(batch_steps(3, 1000, 500, [0, 0], None), 1);
+        assert_eq!(batch_steps(3, 1000, 500, [0, 0], ms), 50);
+        assert_eq!(batch_steps(490, 1000, 500, [0, 0], ms), 10);
+        assert_eq!(batch_steps(499, 1000, 500, [0, 0], ms), 1);
+        assert_eq!(
+            batch_steps(500, 1000, 500, [0, 0], Some(1e-6)),
+            MAX_BATCH_STEPS
+        );
+        assert_eq!(batch_steps(95, 1000, 500, [100, 0], ms), 5);
+        assert_eq!(batch_steps(95, 1000, 500, [0, 60], ms), 25);
+        assert_eq!(batch_steps(95, 1000, 500, [100, 60], ms), 5);
+        assert_eq!(batch_steps(998, 1000, 500, [0, 0], ms), 2);
+        assert_eq!(batch_steps(10, 1000, 1, [0, 0], ms), 1);
+        assert_eq!(batch_steps(10, 1000, 500, [0, 0], Some(0.09)), 1);
     }
 }

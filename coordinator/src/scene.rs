@@ -73,6 +73,10 @@ pub struct OutputConfig {
     /// Steps between logged bead states and diagnostics (default: steps / 200, at least 1).
     #[serde(default)]
     pub interval: Option<u64>,
+    /// Steps between snapshots of the fields and beads as VTK files for ParaView
+    /// (`DIR/fields.pvd`, `DIR/fields/`; also at step 0 and the last step). Absent: none.
+    #[serde(default)]
+    pub fields_interval: Option<u64>,
 }
 
 #[derive(Debug, Clone, Deserialize, Default)]
@@ -105,6 +109,11 @@ impl LoadedScene {
                 .unwrap_or_default(),
             None => "built-in example".into(),
         }
+    }
+
+    /// Steps between field snapshots (0: none).
+    pub fn fields_interval(&self) -> u64 {
+        self.scene.output.fields_interval.unwrap_or(0)
     }
 
     /// Steps between outputs.
@@ -196,6 +205,11 @@ fn check_ranges(s: &Scene) -> Result<(), SceneError> {
     }
     if s.output.interval == Some(0) {
         return Err(err("key `output.interval`: expected at least 1, got 0"));
+    }
+    if s.output.fields_interval == Some(0) {
+        return Err(err(
+            "key `output.fields_interval`: expected at least 1 (leave it out for no fields), got 0",
+        ));
     }
     for m in &s.analysis.metrics {
         if !crate::metrics::KNOWN.contains(&m.as_str()) {

@@ -49,6 +49,19 @@ pub trait Component {
     /// Replace the full state by one from `save_state`.
     fn restore_state(&mut self, state: &[u8]) -> Result<(), ComponentError>;
 
+    /// Write the component's fields (a fluid's velocity, solid fraction, ...) at the end of
+    /// `step`, time `time`, as files in the existing directory `dir`; return their names
+    /// relative to `dir`. Called between steps, never inside one; it must not change the
+    /// state. Default: no fields, no files.
+    fn write_fields(
+        &mut self,
+        _step: u64,
+        _time: f64,
+        _dir: &std::path::Path,
+    ) -> Result<Vec<String>, ComponentError> {
+        Ok(Vec::new())
+    }
+
     /// After a successful [`Component::restore_state`] through [`dispatch`]: publish what
     /// the other nodes read from this one at the step the state was saved (the fibre node's
     /// bead states), so that a resumed run starts from the same publications as the run that
@@ -96,6 +109,14 @@ pub fn dispatch(
                     .restore_state(&state)
                     .and_then(|()| component.publish_restored(exchange))
                     .map(|()| Reply::Ok),
+            ),
+            false,
+        ),
+        Command::WriteFields { step, time, dir } => (
+            as_reply(
+                component
+                    .write_fields(step, time, std::path::Path::new(&dir))
+                    .map(Reply::Files),
             ),
             false,
         ),

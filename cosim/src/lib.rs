@@ -12,7 +12,8 @@
 //!   definition both nodes use;
 //! - [`scene_keys`]: reading a node's scene tables with errors naming the dotted key;
 //! - [`exchange`]: the bulk-data [`Exchange`](exchange::Exchange) trait and its in-process
-//!   implementation; [`ipc`]: the iceoryx2 implementation of control and bulk data.
+//!   implementation; [`ipc`]: the iceoryx2 implementation of control and bulk data;
+//! - [`vtk`]: VTK XML files (fields, beads, time collections) for ParaView.
 pub mod component;
 pub mod description;
 pub mod effects;
@@ -23,6 +24,7 @@ pub mod profile;
 pub mod protocol;
 pub mod scene_keys;
 pub mod types;
+pub mod vtk;
 
 pub use component::{dispatch, Component, ComponentError};
 pub use description::{ModelDescription, ParameterDescription, PortDescription};

@@ -30,6 +30,11 @@ pub enum Command {
     SaveState,
     /// Replace the full state by one saved earlier.
     RestoreState { state: Vec<u8> },
+    /// Write the node's fields at the end of `step` (time `time`) as files into the existing
+    /// directory `dir` (a path the node can open: the coordinator's output directory).
+    /// Answered by [`Reply::Files`] with the names written, relative to `dir` (none for a
+    /// node without fields).
+    WriteFields { step: u64, time: f64, dir: String },
     /// Release resources and end the serving loop.
     Shutdown,
 }
@@ -81,6 +86,8 @@ pub enum Reply {
         message: String,
     },
     State(Vec<u8>),
+    /// The files a [`Command::WriteFields`] wrote, relative to its directory.
+    Files(Vec<String>),
     Ok,
     /// The command failed; the message says why, for the user.
     Error(String),

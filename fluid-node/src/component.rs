@@ -686,6 +686,38 @@ impl Component for FluidComponent {
         report
     }
 
+    fn write_fields(
+        &mut self,
+        step: u64,
+        _time: f64,
+        dir: &std::path::Path,
+    ) -> Result<Vec<String>, ComponentError> {
+        let name = crate::field_output::file_name(step);
+        if let Some(fpd) = &self.fpd {
+            return fpd.write_fields(dir, &name);
+        }
+        let run = self.run.as_ref().ok_or_else(|| {
+            ComponentError::new("fluid-node: no fields to write before configure")
+        })?;
+        let g = run.ns.grid();
+        let n = g.nx * g.ny * g.nz;
+        let components: Vec<&[f64]> = run
+            .ns
+            .velocity_components()
+            .iter()
+            .map(|c| &c[..])
+            .collect();
+        let velocity = crate::field_output::interleave(&components, n);
+        let mut arrays = vec![
+            cosim::vtk::Array::vector("velocity", &velocity),
+            cosim::vtk::Array::scalar("solid_fraction", run.spm.phi()),
+        ];
+        if let Some(b) = &run.binary {
+            arrays.push(cosim::vtk::Array::scalar("psi", b.solver().psi()));
+        }
+        crate::field_output::write(dir, &name, g.sizes(), &arrays)
+    }
+
     fn save_state(&self) -> Result<Vec<u8>, ComponentError> {
         if let Some(fpd) = &self.fpd {
             return fpd.save();

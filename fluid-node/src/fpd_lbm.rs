@@ -467,6 +467,30 @@ impl FpdRun {
     /// little-endian f64. The viscosity and force fields are rebuilt from the beads at the
     /// next step (the sparse viscosity update equals the full one bit for bit), the solid
     /// layers and the stream's sponge from the scene.
+    /// Write the lattice's velocity, density, viscosity and (with beads) solid fraction to
+    /// `dir/name` ([`crate::field_output`]).
+    pub fn write_fields(
+        &self,
+        dir: &std::path::Path,
+        name: &str,
+    ) -> Result<Vec<String>, ComponentError> {
+        use cosim::vtk::Array;
+        let (nx, ny) = (self.lattice.nx(), self.lattice.ny());
+        let n = nx * ny;
+        let (mut rho, mut ux, mut uy) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        self.lattice.fields(&mut rho, &mut ux, &mut uy);
+        let velocity = crate::field_output::interleave(&[&ux, &uy], n);
+        let mut arrays = vec![
+            Array::vector("velocity", &velocity),
+            Array::scalar("density", &rho),
+            Array::scalar("viscosity", self.lattice.viscosity()),
+        ];
+        if let Some(c) = &self.coupling {
+            arrays.push(Array::scalar("solid_fraction", c.solid_fraction()));
+        }
+        crate::field_output::write(dir, name, [nx, ny, 1], &arrays)
+    }
+
     pub fn save(&self) -> Result<Vec<u8>, ComponentError> {
         let (f, time) = self.lattice.saved_state();
         let header = serde_json::json!({

@@ -16,11 +16,13 @@
 //! - [`mrt_d2q9`]: a standalone MRT lattice Boltzmann D2Q9 solver with per-node viscosity and
 //!   Guo forcing, bounce-back walls (the flow solver of FPD on MRT-LBM, S2023);
 //! - [`stability`]: time-step limits; [`config`]: the `[fluid]`/`[walls]` part of a scene;
-//! - [`component`]: [`FluidComponent`], the [`cosim::Component`] the executable serves.
+//! - [`component`]: [`FluidComponent`], the [`cosim::Component`] the executable serves;
+//!   [`field_output`]: its fields as VTK files for ParaView, written between steps.
 pub mod binary_fluid;
 pub mod cahn_hilliard;
 pub mod component;
 pub mod config;
+pub mod field_output;
 pub mod fpd;
 pub mod fpd_lbm;
 pub mod grain_tuner;

@@ -1,0 +1,157 @@
+//! Snapshots for ParaView (`output.fields_interval`): every so many steps each node writes
+//! its fields (the fluid node: `fields/fluid_<step>.vti`, cosim::vtk) and the coordinator
+//! writes the beads of the same step (`fields/beads_<step>.vtp`: centres as points and one
+//! polyline per fibre, with velocity, angular velocity, radius, fibre and bead number);
+//! `DIR/fields.pvd` lists them with their times, so ParaView opens the run as one time
+//! series. Written between steps, so a snapshot changes no result.
+use crate::runner::{fail, Node, RunError};
+use cosim::vtk::{self, Array, Values};
+use cosim::{BeadState, Command, Reply};
+use std::path::{Path, PathBuf};
+
+/// Subfolder of the output directory that holds the snapshot files.
+const FOLDER: &str = "fields";
+/// The collection file in the output directory.
+pub(crate) const COLLECTION: &str = "fields.pvd";
+
+pub(crate) struct Snapshots {
+    out: PathBuf,
+    /// Steps between snapshots.
+    every: u64,
+    /// (time, part, file relative to `out`) of every file written.
+    entries: Vec<(f64, usize, String)>,
+}
+
+impl Snapshots {
+    /// `None` when the scene asks for no snapshots (`every` = 0).
+    pub(crate) fn new(out: &Path, every: u64) -> Option<Self> {
+        (every > 0).then(|| Self {
+            out: out.to_path_buf(),
+            every,
+            entries: Vec::new(),
+        })
+    }
+
+    /// A resumed run into the same output directory: keep the snapshots its collection lists
+    /// up to `time` (the checkpoint's), so that the series runs on from them.
+    pub(crate) fn keep_earlier(&mut self, time: f64) {
+        let Ok(xml) = std::fs::read_to_string(self.out.join(COLLECTION)) else {
+            return;
+        };
+        for line in xml.lines().filter(|l| l.starts_with("<DataSet ")) {
+            let attr = |k| vtk::attribute(line, k);
+            if let (Some(t), Some(part), Some(file)) = (
+                attr("timestep").and_then(|t| t.parse::<f64>().ok()),
+                attr("part").and_then(|p| p.parse::<usize>().ok()),
+                attr("file"),
+            ) {
+                if t <= time {
+                    self.entries.push((t, part, file.to_string()));
+                }
+            }
+        }
+    }
+
+    /// Whether the end of step `step_end` (1-based) gets a snapshot; `last`: the run ends there.
+    pub(crate) fn due(&self, step_end: u64, last: bool) -> bool {
+        step_end.is_multiple_of(self.every) || last
+    }
+
+    /// Steps between snapshots (the batches of steps end there, as at a checkpoint).
+    pub(crate) fn every(&self) -> u64 {
+        self.every
+    }
+
+    /// Write the snapshot of the end of step `step`, time `time`: each node's fields, the
+    /// beads (`beads`: beads per fibre; `radii`: per fibre) and the collection so far.
+    pub(crate) fn write(
+        &mut self,
+        step: u64,
+        time: f64,
+        nodes: &mut [Node],
+        beads: &[usize],
+        radii: &[f64],
+        states: &[BeadState],
+    ) -> Result<(), RunError> {
+        let dir = self.out.join(FOLDER);
+        std::fs::create_dir_all(&dir)
+            .map_err(|e| fail(format!("cannot create {}: {e}", dir.display())))?;
+        let mut files = Vec::new();
+        for n in nodes.iter_mut() {
+            let name = n.link.name().to_string();
+            let command = Command::WriteFields {
+                step,
+                time,
+                dir: dir.display().to_string(),
+            };
+            match n.link.call(&command) {
+                Ok(Reply::Files(f)) => files.extend(f),
+                Ok(Reply::Error(e)) => {
+                    return Err(fail(format!("fields at step {step}: node `{name}`: {e}")))
+                }
+                Ok(other) => {
+                    return Err(fail(format!(
+                        "fields at step {step}: node `{name}` answered {other:?} to write-fields"
+                    )))
+                }
+                Err(e) => return Err(fail(format!("fields at step {step}: {e}"))),
+            }
+        }
+        if !states.is_empty() {
+            let name = format!("beads_{step:08}.vtp");
+            write_beads(&dir.join(&name), beads, radii, states).map_err(fail)?;
+            files.push(name);
+        }
+        for f in files {
+            let part = self.entries.iter().filter(|e| e.0 == time).count();
+            self.entries.push((time, part, format!("{FOLDER}/{f}")));
+        }
+        vtk::write_collection(&self.out.join(COLLECTION), &self.entries).map_err(fail)
+    }
+
+    /// The collection, for the summary's `files`, once something was written.
+    pub(crate) fn files(&self) -> Vec<String> {
+        if self.entries.is_empty() {
+            Vec::new()
+        } else {
+            vec![COLLECTION.to_string()]
+        }
+    }
+}
+
+/// The beads as points, a polyline per fibre.
+fn write_beads(
+    path: &Path,
+    beads: &[usize],
+    radii: &[f64],
+    states: &[BeadState],
+) -> Result<(), String> {
+    let positions: Vec<f64> = states.iter().flat_map(|s| s.position).collect();
+    let velocity: Vec<f64> = states.iter().flat_map(|s| s.velocity).collect();
+    let spin: Vec<f64> = states.iter().flat_map(|s| s.angular_velocity).collect();
+    let (mut radius, mut fibre, mut bead) = (Vec::new(), Vec::new(), Vec::new());
+    for (f, &n) in beads.iter().enumerate() {
+        for b in 0..n {
+            radius.push(radii.get(f).copied().unwrap_or(1.0));
+            fibre.push(f as i64);
+            bead.push(b as i64);
+        }
+    }
+    let int = |name, v| Array {
+        name,
+        components: 1,
+        values: Values::I64(v),
+    };
+    vtk::write_points(
+        path,
+        &positions,
+        beads,
+        &[
+            Array::vector("velocity", &velocity),
+            Array::vector("angular_velocity", &spin),
+            Array::scalar("radius", &radius),
+            int("fibre", &fibre),
+            int("bead", &bead),
+        ],
+    )
+}
