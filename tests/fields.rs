@@ -21,8 +21,8 @@ fn array<'a>(a: &'a [(String, Vec<f64>)], name: &str) -> &'a [f64] {
 
 /// The built-in example's scene (SPM, 96 x 96, walls at -+0.0275, beads of radius 4), 200
 /// steps with a snapshot every 100: files at steps 0, 100 and 200, the same bytes in one
-/// process and in three and after a resume, the walls' slabs moving at the wall speed, the
-/// profile 1 inside the beads.
+/// process and in three and after a resume, a picture of each, the walls' slabs moving at the
+/// wall speed, the profile 1 inside the beads.
 #[test]
 fn spm_snapshots_hold_the_flow_and_the_beads_in_either_layout() {
     let cfg = config("spm/tumbling.toml");
@@ -44,6 +44,9 @@ fn spm_snapshots_hold_the_flow_and_the_beads_in_either_layout() {
             );
         }
     }
+    // Each 2D fluid snapshot is drawn too (vorticity, beads).
+    let png = std::fs::read(procs.join("fields/fluid_00000200.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(procs.join("summary.json")).unwrap())
             .unwrap();

@@ -3,7 +3,8 @@
 //! writes the beads of the same step (`fields/beads_<step>.vtp`: centres as points and one
 //! polyline per fibre, with velocity, angular velocity, radius, fibre and bead number);
 //! `DIR/fields.pvd` lists them with their times, so ParaView opens the run as one time
-//! series. Written between steps, so a snapshot changes no result.
+//! series. A 2D fluid snapshot is also drawn as `fields/fluid_<step>.png` (field_plot.rs).
+//! Written between steps, so a snapshot changes no result.
 use crate::runner::{fail, Node, RunError};
 use cosim::vtk::{self, Array, Values};
 use cosim::{BeadState, Command, Reply};
@@ -20,15 +21,22 @@ pub(crate) struct Snapshots {
     every: u64,
     /// (time, part, file relative to `out`) of every file written.
     entries: Vec<(f64, usize, String)>,
+    /// Whether the fluid's y axis is periodic (no bounce-back walls at the lattice's ends).
+    periodic_y: bool,
+    /// Why a picture could not be drawn (the run goes on; the summary's `file_errors`).
+    pub(crate) picture_error: Option<String>,
 }
 
 impl Snapshots {
     /// `None` when the scene asks for no snapshots (`every` = 0).
-    pub(crate) fn new(out: &Path, every: u64) -> Option<Self> {
+    /// `periodic_y`: whether the fluid's y axis is periodic (for the pictures' vorticity).
+    pub(crate) fn new(out: &Path, every: u64, periodic_y: bool) -> Option<Self> {
         (every > 0).then(|| Self {
             out: out.to_path_buf(),
             every,
             entries: Vec::new(),
+            periodic_y,
+            picture_error: None,
         })
     }
 
@@ -63,7 +71,8 @@ impl Snapshots {
     }
 
     /// Write the snapshot of the end of step `step`, time `time`: each node's fields, the
-    /// beads (`beads`: beads per fibre; `radii`: per fibre) and the collection so far.
+    /// beads (`beads`: beads per fibre; `radii`: per fibre), the collection so far, and the
+    /// picture of a 2D fluid.
     pub(crate) fn write(
         &mut self,
         step: u64,
@@ -97,6 +106,20 @@ impl Snapshots {
                 Err(e) => return Err(fail(format!("fields at step {step}: {e}"))),
             }
         }
+        let discs: Vec<([f64; 2], f64)> = beads
+            .iter()
+            .enumerate()
+            .flat_map(|(f, &n)| std::iter::repeat_n(radii.get(f).copied().unwrap_or(1.0), n))
+            .zip(states)
+            .map(|(r, s)| ([s.position[0], s.position[1]], r))
+            .collect();
+        for f in files.iter().filter(|f| f.ends_with(".vti")) {
+            let png = dir.join(f.replace(".vti", ".png"));
+            let title = format!("step {step}, t = {time}");
+            if let Err(e) = picture(&dir.join(f), &png, &title, &discs, self.periodic_y) {
+                self.picture_error.get_or_insert(e);
+            }
+        }
         if !states.is_empty() {
             let name = format!("beads_{step:08}.vtp");
             write_beads(&dir.join(&name), beads, radii, states).map_err(fail)?;
@@ -117,6 +140,36 @@ impl Snapshots {
             vec![COLLECTION.to_string()]
         }
     }
+}
+
+/// Draw the 2D fluid snapshot `vti` to `png` (3D snapshots are left to ParaView).
+fn picture(
+    vti: &Path,
+    png: &Path,
+    title: &str,
+    beads: &[([f64; 2], f64)],
+    periodic_y: bool,
+) -> Result<(), String> {
+    let [nx, ny, nz] = vtk::image_size(vti)?;
+    if nz != 1 {
+        return Ok(());
+    }
+    let arrays = vtk::read_arrays(vti)?;
+    let get = |name: &str| arrays.iter().find(|(n, _)| n == name).map(|(_, v)| &v[..]);
+    let velocity = get("velocity").ok_or_else(|| format!("{}: no velocity", vti.display()))?;
+    crate::field_plot::draw(
+        png,
+        title,
+        &crate::field_plot::Snapshot {
+            nx,
+            ny,
+            velocity,
+            solid: get("solid_fraction"),
+            psi: get("psi"),
+            beads,
+            periodic_y,
+        },
+    )
 }
 
 /// The beads as points, a polyline per fibre.

@@ -591,7 +591,10 @@ fn drive(
     });
     st.pipelined = batches.is_some();
     let every = opts.checkpoint_interval;
-    let mut snapshots = crate::field_snapshots::Snapshots::new(&opts.out, scene.fields_interval());
+    // FPD walls bounce back at the lattice's ends; SPM walls are slabs in a periodic box.
+    let periodic_y = plan.coupling != "fpd" || scene.scene.walls.is_none();
+    let mut snapshots =
+        crate::field_snapshots::Snapshots::new(&opts.out, scene.fields_interval(), periodic_y);
     let fields_every = snapshots.as_ref().map_or(0, |s| s.every());
     if let Some(snap) = snapshots.as_mut() {
         match &resumed {
@@ -754,6 +757,9 @@ fn drive(
     bar.finish_and_clear();
     if let Some(snap) = &snapshots {
         st.files.extend(snap.files());
+        if let Some(e) = &snap.picture_error {
+            st.file_errors.insert("fields png".into(), e.clone());
+        }
     }
     if has_beads {
         exchange
