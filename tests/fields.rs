@@ -151,6 +151,22 @@ fn fpd_snapshots_hold_the_lattice_fields() {
     let _ = std::fs::remove_dir_all(out);
 }
 
+/// A 3D grid (the 20^3 periodic array of `array_drag_3d.toml`): the fields on every node, and
+/// a picture of the middle plane.
+#[test]
+fn three_d_snapshots_hold_the_whole_grid() {
+    let set = [
+        "time.steps=2".to_string(),
+        "output.fields_interval=2".to_string(),
+    ];
+    let out = run_scene("fields-3d", &config("spm/array_drag_3d.toml"), &set, &[]).unwrap();
+    let f = arrays(&out.join("fields/fluid_00000002.vti"));
+    assert_eq!(array(&f, "velocity").len(), 3 * 20 * 20 * 20);
+    assert_eq!(array(&f, "solid_fraction").len(), 20 * 20 * 20);
+    assert!(out.join("fields/fluid_00000002.png").exists());
+    let _ = std::fs::remove_dir_all(out);
+}
+
 /// `output.fields_interval = 0` is refused with the key named; a scene without it writes no
 /// fields.
 #[test]

@@ -3,7 +3,8 @@
 //! writes the beads of the same step (`fields/beads_<step>.vtp`: centres as points and one
 //! polyline per fibre, with velocity, angular velocity, radius, fibre and bead number);
 //! `DIR/fields.pvd` lists them with their times, so ParaView opens the run as one time
-//! series. A 2D fluid snapshot is also drawn as `fields/fluid_<step>.png` (field_plot.rs).
+//! series. Each fluid snapshot is also drawn as `fields/fluid_<step>.png` (field_plot.rs; in
+//! 3D its middle x-y plane).
 //! Written between steps, so a snapshot changes no result.
 use crate::runner::{fail, Node, RunError};
 use cosim::vtk::{self, Array, Values};
@@ -106,12 +107,12 @@ impl Snapshots {
                 Err(e) => return Err(fail(format!("fields at step {step}: {e}"))),
             }
         }
-        let discs: Vec<([f64; 2], f64)> = beads
+        let discs: Vec<([f64; 3], f64)> = beads
             .iter()
             .enumerate()
             .flat_map(|(f, &n)| std::iter::repeat_n(radii.get(f).copied().unwrap_or(1.0), n))
             .zip(states)
-            .map(|(r, s)| ([s.position[0], s.position[1]], r))
+            .map(|(r, s)| (s.position, r))
             .collect();
         for f in files.iter().filter(|f| f.ends_with(".vti")) {
             let png = dir.join(f.replace(".vti", ".png"));
@@ -142,31 +143,48 @@ impl Snapshots {
     }
 }
 
-/// Draw the 2D fluid snapshot `vti` to `png` (3D snapshots are left to ParaView).
+/// Draw the fluid snapshot `vti` to `png`: the whole of a 2D one, the middle x-y plane of a
+/// 3D one (the plane of the shear), with the beads (centre, radius) that cut it.
 fn picture(
     vti: &Path,
     png: &Path,
     title: &str,
-    beads: &[([f64; 2], f64)],
+    beads: &[([f64; 3], f64)],
     periodic_y: bool,
 ) -> Result<(), String> {
     let [nx, ny, nz] = vtk::image_size(vti)?;
-    if nz != 1 {
-        return Ok(());
-    }
     let arrays = vtk::read_arrays(vti)?;
-    let get = |name: &str| arrays.iter().find(|(n, _)| n == name).map(|(_, v)| &v[..]);
-    let velocity = get("velocity").ok_or_else(|| format!("{}: no velocity", vti.display()))?;
+    // The plane z = k: nodes k nx ny .. (k + 1) nx ny of each array.
+    let k = nz / 2;
+    let plane = |name: &str| {
+        arrays.iter().find(|(n, _)| n == name).map(|(_, v)| {
+            let per = v.len() / (nx * ny * nz);
+            &v[k * nx * ny * per..(k + 1) * nx * ny * per]
+        })
+    };
+    let velocity = plane("velocity").ok_or_else(|| format!("{}: no velocity", vti.display()))?;
+    let discs: Vec<([f64; 2], f64)> = beads
+        .iter()
+        .filter_map(|&(c, r)| {
+            let dz = if nz > 1 { c[2] - k as f64 } else { 0.0 };
+            (dz.abs() < r).then(|| ([c[0], c[1]], (r * r - dz * dz).sqrt()))
+        })
+        .collect();
+    let title = if nz > 1 {
+        format!("{title}, plane z = {k}")
+    } else {
+        title.to_string()
+    };
     crate::field_plot::draw(
         png,
-        title,
+        &title,
         &crate::field_plot::Snapshot {
             nx,
             ny,
             velocity,
-            solid: get("solid_fraction"),
-            psi: get("psi"),
-            beads,
+            solid: plane("solid_fraction"),
+            psi: plane("psi"),
+            beads: &discs,
             periodic_y,
         },
     )
