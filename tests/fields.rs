@@ -181,7 +181,7 @@ fn a_zero_fields_interval_is_refused() {
     assert!(e.contains("output.fields_interval"), "{e}");
     let out = run_scene(
         "fields-none",
-        &config("spm/tumbling.toml"),
+        &config("spm/couette.toml"),
         &["time.steps=2".to_string()],
         &[],
     )
