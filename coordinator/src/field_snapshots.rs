@@ -116,7 +116,8 @@ impl Snapshots {
             .collect();
         for f in files.iter().filter(|f| f.ends_with(".vti")) {
             let png = dir.join(f.replace(".vti", ".png"));
-            let title = format!("step {step}, t = {time}");
+            // Six decimals at most: dt = 0.7 makes t = 15749.999999999998 at step 22500.
+            let title = format!("step {step}, t = {}", (time * 1e6).round() / 1e6);
             if let Err(e) = picture(&dir.join(f), &png, &title, &discs, self.periodic_y) {
                 self.picture_error.get_or_insert(e);
             }
