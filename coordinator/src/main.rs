@@ -168,6 +168,9 @@ fn execute(cmd: Cmd) -> Result<(), String> {
                 "steps:    {} x dt {}",
                 scene.scene.time.steps, scene.scene.time.dt
             );
+            if let Some(f) = scene.fields_summary() {
+                println!("fields:   {f}");
+            }
             for (name, limit) in &configured.time_step_limits {
                 println!("limit:    {name}: dt <= {limit:.6e}");
             }

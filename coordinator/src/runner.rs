@@ -523,6 +523,9 @@ fn drive(
                 format!("processes (run prefix {prefix})")
             }
         );
+        if let Some(f) = scene.fields_summary() {
+            eprintln!("fields:   {f}");
+        }
         for n in &st.configured.notes {
             eprintln!("note:     {n}");
         }

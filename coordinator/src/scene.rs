@@ -116,6 +116,20 @@ impl LoadedScene {
         self.scene.output.fields_interval.unwrap_or(0)
     }
 
+    /// What the run's field snapshots will be, for `check` and the start of a run: `None`
+    /// without `output.fields_interval`.
+    pub fn fields_summary(&self) -> Option<String> {
+        let every = self.fields_interval();
+        let steps = self.scene.time.steps;
+        (every > 0).then(|| {
+            // Step 0, every multiple of `every`, and the last step if it is not one.
+            let count = 1 + steps / every + u64::from(!steps.is_multiple_of(every));
+            format!(
+                "from step 0 every {every} steps and at the last: {count} snapshots (fields.pvd)"
+            )
+        })
+    }
+
     /// Steps between outputs.
     pub fn output_interval(&self) -> u64 {
         self.scene
