@@ -44,9 +44,20 @@ fn spm_snapshots_hold_the_flow_and_the_beads_in_either_layout() {
             );
         }
     }
-    // Each 2D fluid snapshot is drawn too (vorticity, beads).
+    // Each 2D fluid snapshot is drawn too (vorticity, beads), and logged for Foxglove.
     let png = std::fs::read(procs.join("fields/fluid_00000200.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
+    let images =
+        coordinator::mcap_log::read_topic(&procs.join("run.mcap"), "/fluid/vorticity").unwrap();
+    assert_eq!(images.len(), 3);
+    let last = &images[2];
+    assert_eq!(last["format"], "png");
+    assert_eq!(last["timestamp"]["sec"], 140);
+    use base64::Engine as _;
+    let logged = base64::engine::general_purpose::STANDARD
+        .decode(last["data"].as_str().unwrap())
+        .unwrap();
+    assert_eq!(logged, png);
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(procs.join("summary.json")).unwrap())
             .unwrap();

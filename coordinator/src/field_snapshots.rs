@@ -6,6 +6,7 @@
 //! series. Each fluid snapshot is also drawn as `fields/fluid_<step>.png` (field_plot.rs; in
 //! 3D its middle x-y plane).
 //! Written between steps, so a snapshot changes no result.
+use crate::mcap_log::RunLog;
 use crate::runner::{fail, Node, RunError};
 use cosim::vtk::{self, Array, Values};
 use cosim::{BeadState, Command, Reply};
@@ -72,16 +73,15 @@ impl Snapshots {
     }
 
     /// Write the snapshot of the end of step `step`, time `time`: each node's fields, the
-    /// beads (`beads`: beads per fibre; `radii`: per fibre), the collection so far, and the
-    /// picture of a 2D fluid.
+    /// beads (`fibres`: beads per fibre and their radius; `states`), the collection so far,
+    /// and the picture of the fluid (also logged on `/fluid/vorticity`).
     pub(crate) fn write(
         &mut self,
-        step: u64,
-        time: f64,
+        (step, time): (u64, f64),
         nodes: &mut [Node],
-        beads: &[usize],
-        radii: &[f64],
+        (beads, radii): (&[usize], &[f64]),
         states: &[BeadState],
+        log: &mut RunLog,
     ) -> Result<(), RunError> {
         let dir = self.out.join(FOLDER);
         std::fs::create_dir_all(&dir)
@@ -118,8 +118,13 @@ impl Snapshots {
             let png = dir.join(f.replace(".vti", ".png"));
             // Six decimals at most: dt = 0.7 makes t = 15749.999999999998 at step 22500.
             let title = format!("step {step}, t = {}", (time * 1e6).round() / 1e6);
-            if let Err(e) = picture(&dir.join(f), &png, &title, &discs, self.periodic_y) {
-                self.picture_error.get_or_insert(e);
+            let drawn = picture(&dir.join(f), &png, &title, &discs, self.periodic_y)
+                .and_then(|()| std::fs::read(&png).map_err(|e| format!("{}: {e}", png.display())));
+            match drawn {
+                Ok(bytes) => log.vorticity_picture(time, &bytes).map_err(fail)?,
+                Err(e) => {
+                    self.picture_error.get_or_insert(e);
+                }
             }
         }
         if !states.is_empty() {

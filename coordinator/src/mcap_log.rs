@@ -4,7 +4,9 @@
 //! Channels: `/scene` (scene text, effects, schedule; once), `/fibre/bead_states` (every
 //! exchanged bead state at the output interval, full precision), `/fibre/scene`
 //! (`foxglove.SceneUpdate`: spheres and a line per fibre), `/diagnostics` (energies, speeds),
-//! `/timings` (wall seconds per phase so far; the only channel that is not deterministic).
+//! `/timings` (wall seconds per phase so far; the only channel that is not deterministic),
+//! and with field snapshots `/fluid/vorticity` (`foxglove.CompressedImage`, the PNG of each
+//! snapshot; field_snapshots.rs).
 //! Log time is simulation time (scene units) times 1e9. The writer closes a chunk at every
 //! output so that the file stays readable up to the last output if the run is cut short.
 use cosim::BeadState;
@@ -22,10 +24,14 @@ pub struct RunLog {
     foxglove: u16,
     diagnostics: u16,
     timings: u16,
+    /// `/fluid/vorticity`, added with the first picture.
+    images: Option<u16>,
     sequence: u32,
 }
 
 const OBJECT_SCHEMA: &str = r#"{"type":"object"}"#;
+
+const IMAGE_SCHEMA: &str = r#"{"title":"foxglove.CompressedImage","type":"object","properties":{"timestamp":{"type":"object"},"frame_id":{"type":"string"},"data":{"type":"string","contentEncoding":"base64"},"format":{"type":"string"}}}"#;
 
 const SCENE_UPDATE_SCHEMA: &str = r#"{"title":"foxglove.SceneUpdate","type":"object","properties":{"deletions":{"type":"array"},"entities":{"type":"array","items":{"type":"object","properties":{"timestamp":{"type":"object"},"frame_id":{"type":"string"},"id":{"type":"string"},"lifetime":{"type":"object"},"frame_locked":{"type":"boolean"},"metadata":{"type":"array"},"arrows":{"type":"array"},"cubes":{"type":"array"},"spheres":{"type":"array"},"cylinders":{"type":"array"},"lines":{"type":"array"},"triangles":{"type":"array"},"texts":{"type":"array"},"models":{"type":"array"}}}}}}"#;
 
@@ -65,6 +71,7 @@ impl RunLog {
             foxglove,
             diagnostics,
             timings,
+            images: None,
             sequence: 0,
         })
     }
@@ -170,6 +177,37 @@ impl RunLog {
             self.foxglove,
             time,
             &json!({ "deletions": [], "entities": entities }),
+        )
+    }
+
+    /// A PNG picture of the fluid at `time` on `/fluid/vorticity`, for Foxglove's image panel.
+    pub fn vorticity_picture(&mut self, time: f64, png: &[u8]) -> Result<(), String> {
+        use base64::Engine as _;
+        let channel = match self.images {
+            Some(c) => c,
+            None => {
+                let sid = self
+                    .writer
+                    .add_schema(
+                        "foxglove.CompressedImage",
+                        "jsonschema",
+                        IMAGE_SCHEMA.as_bytes(),
+                    )
+                    .map_err(mcap_err)?;
+                let c = self
+                    .writer
+                    .add_channel(sid, "/fluid/vorticity", "json", &BTreeMap::new())
+                    .map_err(mcap_err)?;
+                *self.images.insert(c)
+            }
+        };
+        let stamp =
+            json!({ "sec": time.floor() as i64, "nsec": ((time - time.floor()) * 1e9) as i64 });
+        let data = base64::engine::general_purpose::STANDARD.encode(png);
+        self.write(
+            channel,
+            time,
+            &json!({ "timestamp": stamp, "frame_id": "fluid", "data": data, "format": "png" }),
         )
     }
 

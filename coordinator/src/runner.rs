@@ -602,7 +602,7 @@ fn drive(
     if let Some(snap) = snapshots.as_mut() {
         match &resumed {
             Some(_) => snap.keep_earlier(st.time),
-            None => snap.write(first_step, st.time, nodes, &beads, &radii, &states)?,
+            None => snap.write((first_step, st.time), nodes, (&beads, &radii), &states, log)?,
         }
     }
     let rests = scene.scene.time.rest_tolerance.is_some();
@@ -733,7 +733,7 @@ fn drive(
                             fail(format!("reading bead states at step {}: {e}", step + 1))
                         })?;
                 }
-                snap.write(step + 1, st.time, nodes, &beads, &radii, &states)?;
+                snap.write((step + 1, st.time), nodes, (&beads, &radii), &states, log)?;
             }
         }
         bar.inc(1);
