@@ -818,8 +818,8 @@ const MAX_BATCH_STEPS: u64 = 64;
 
 /// How many steps from `step` the nodes may run in one batch ([`pipeline::Batches::run_steps`]):
 /// up to the next step whose end the coordinator logs (`interval`) or checkpoints or
-/// snapshots (`every`: those intervals, 0 for never), the last step, and [`BATCH_SECONDS`] of wall time at `step_wall` seconds a step
-/// (one step while that is unknown). Each batch saves the coordinator a request and a reply
+/// snapshots (`every`: those intervals, 0 for never), the last step, and [`BATCH_SECONDS`] of
+/// wall time at `step_wall` seconds a step (one step while that is unknown). Each batch saves the coordinator a request and a reply
 /// to each node per step, the system calls and wake-ups of which take a core from the nodes'
 /// threads on a small machine.
 fn batch_steps(
