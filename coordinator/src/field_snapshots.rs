@@ -4,7 +4,7 @@
 //! polyline per fibre, with velocity, angular velocity, radius, fibre and bead number);
 //! `DIR/fields.pvd` lists them with their times, so ParaView opens the run as one time
 //! series. Each fluid snapshot is also drawn as `fields/fluid_<step>.png` (field_plot.rs; in
-//! 3D its middle x-y plane).
+//! 3D its middle x-y plane), and the picture logged on the MCAP topic `/fluid/vorticity`.
 //! Written between steps, so a snapshot changes no result.
 use crate::mcap_log::RunLog;
 use crate::runner::{fail, Node, RunError};
