@@ -74,7 +74,8 @@ pub struct OutputConfig {
     #[serde(default)]
     pub interval: Option<u64>,
     /// Steps between snapshots of the fields and beads as VTK files for ParaView
-    /// (`DIR/fields.pvd`, `DIR/fields/`; also at step 0 and the last step). Absent: none.
+    /// (`DIR/fields.pvd`, `DIR/fields/`; also at step 0 and the last step). Absent or 0: none
+    /// (0 turns off a scene's snapshots from the command line).
     #[serde(default)]
     pub fields_interval: Option<u64>,
 }
@@ -219,11 +220,6 @@ fn check_ranges(s: &Scene) -> Result<(), SceneError> {
     }
     if s.output.interval == Some(0) {
         return Err(err("key `output.interval`: expected at least 1, got 0"));
-    }
-    if s.output.fields_interval == Some(0) {
-        return Err(err(
-            "key `output.fields_interval`: expected at least 1 (leave it out for no fields), got 0",
-        ));
     }
     for m in &s.analysis.metrics {
         if !crate::metrics::KNOWN.contains(&m.as_str()) {
