@@ -4,8 +4,8 @@
 //! Binary arrays are appended raw after the XML: little-endian Float64 or Int64, each block
 //! preceded by its length in bytes as a UInt64 (`header_type="UInt64"`), as the VTK XML
 //! format defines it. No compression: a snapshot is written once and read by a viewer.
-//! (Not the `vtkio` crate: its release depends on nom 3 and quick-xml 0.22; the writer is the
-//! hundred lines below.)
+//! (Not the `vtkio` crate: its release depends on nom 3 and quick-xml 0.22, and the three
+//! writers and the reader below are all the project needs of the format.)
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::Path;
