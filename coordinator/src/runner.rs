@@ -710,11 +710,16 @@ fn drive(
                 trajectory.push_shape(st.time, &states, beads[0]);
             }
         }
-        if (step + 1) % interval == 0 || step + 1 == steps || at_rest || stop {
+        let last = step + 1 == steps || at_rest || stop;
+        let log_due = (step + 1) % interval == 0 || last;
+        let snapshot_due = snapshots.as_ref().is_some_and(|s| s.due(step + 1, last));
+        if has_beads && (log_due || snapshot_due) {
+            exchange
+                .read_states_of_step(Port::BeadStates, step + 1, &mut states)
+                .map_err(|e| fail(format!("reading bead states at step {}: {e}", step + 1)))?;
+        }
+        if log_due {
             if has_beads {
-                exchange
-                    .read_states_of_step(Port::BeadStates, step + 1, &mut states)
-                    .map_err(|e| fail(format!("reading bead states at step {}: {e}", step + 1)))?;
                 log.bead_states(step + 1, st.time, &beads, &radii, &states)
                     .map_err(fail)?;
             }
@@ -724,17 +729,8 @@ fn drive(
                 .map_err(fail)?;
             log.flush().map_err(fail)?;
         }
-        if let Some(snap) = snapshots.as_mut() {
-            if snap.due(step + 1, step + 1 == steps || at_rest || stop) {
-                if has_beads {
-                    exchange
-                        .read_states_of_step(Port::BeadStates, step + 1, &mut states)
-                        .map_err(|e| {
-                            fail(format!("reading bead states at step {}: {e}", step + 1))
-                        })?;
-                }
-                snap.write((step + 1, st.time), nodes, (&beads, &radii), &states, log)?;
-            }
+        if let (Some(snap), true) = (snapshots.as_mut(), snapshot_due) {
+            snap.write((step + 1, st.time), nodes, (&beads, &radii), &states, log)?;
         }
         bar.inc(1);
         if every > 0 && ((step + 1) % every == 0 || step + 1 == steps || stop) {
