@@ -243,8 +243,17 @@ pub fn read_arrays(path: &Path) -> Result<Vec<(String, Vec<f64>)>, String> {
 /// Nodes per axis of a file written by [`write_image`].
 pub fn image_size(path: &Path) -> Result<[usize; 3], String> {
     let fail = |m: &str| format!("{}: {m}", path.display());
-    let bytes = std::fs::read(path).map_err(|e| fail(&e.to_string()))?;
-    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(4096)]).into_owned();
+    // The header is in the first lines; the data after it may be many megabytes.
+    let mut bytes = Vec::with_capacity(4096);
+    std::io::Read::read_to_end(
+        &mut std::io::Read::take(
+            std::fs::File::open(path).map_err(|e| fail(&e.to_string()))?,
+            4096,
+        ),
+        &mut bytes,
+    )
+    .map_err(|e| fail(&e.to_string()))?;
+    let head = String::from_utf8_lossy(&bytes).into_owned();
     let extent = head
         .lines()
         .find_map(|l| attribute(l, "WholeExtent"))
