@@ -1,11 +1,11 @@
-//! A PNG picture of a 2D snapshot: the vorticity of the flow, the beads drawn to scale and,
-//! in a binary fluid, the interface psi = 0. Written next to each 2D fluid snapshot
-//! (field_snapshots.rs) from the file the fluid node wrote, so that a run shows its flow
-//! without a viewer.
+//! A PNG picture of a snapshot in an x-y plane (the whole of a 2D grid, the middle plane of a
+//! 3D one): the vorticity of the flow, the beads drawn to scale and, in a binary fluid, the
+//! interface psi = 0. Written next to each fluid snapshot (field_snapshots.rs) from the file
+//! the fluid node wrote, so that a run shows its flow without a viewer.
 use plotters::prelude::*;
 use std::path::Path;
 
-/// One 2D snapshot to draw, nodes at integer positions, x fastest.
+/// One x-y plane to draw, nodes at integer positions, x fastest.
 pub(crate) struct Snapshot<'a> {
     pub nx: usize,
     pub ny: usize,

@@ -73,8 +73,8 @@ impl Snapshots {
     }
 
     /// Write the snapshot of the end of step `step`, time `time`: each node's fields, the
-    /// beads (`fibres`: beads per fibre and their radius; `states`), the collection so far,
-    /// and the picture of the fluid (also logged on `/fluid/vorticity`).
+    /// beads (`beads`: beads per fibre, `radii`: each fibre's bead radius; `states`), the
+    /// collection so far, and the picture of the fluid (also logged on `/fluid/vorticity`).
     pub(crate) fn write(
         &mut self,
         (step, time): (u64, f64),
@@ -107,12 +107,16 @@ impl Snapshots {
                 Err(e) => return Err(fail(format!("fields at step {step}: {e}"))),
             }
         }
-        let discs: Vec<([f64; 3], f64)> = beads
+        // Each bead's radius, for the picture and the beads' file.
+        let radius: Vec<f64> = beads
             .iter()
             .enumerate()
             .flat_map(|(f, &n)| std::iter::repeat_n(radii.get(f).copied().unwrap_or(1.0), n))
-            .zip(states)
-            .map(|(r, s)| (s.position, r))
+            .collect();
+        let discs: Vec<([f64; 3], f64)> = states
+            .iter()
+            .map(|s| s.position)
+            .zip(radius.iter().copied())
             .collect();
         for f in files.iter().filter(|f| f.ends_with(".vti")) {
             let png = dir.join(f.replace(".vti", ".png"));
@@ -129,7 +133,7 @@ impl Snapshots {
         }
         if !states.is_empty() {
             let name = format!("beads_{step:08}.vtp");
-            write_beads(&dir.join(&name), beads, radii, states).map_err(fail)?;
+            write_beads(&dir.join(&name), beads, &radius, states).map_err(fail)?;
             files.push(name);
         }
         for f in files {
@@ -196,20 +200,19 @@ fn picture(
     )
 }
 
-/// The beads as points, a polyline per fibre.
+/// The beads as points, a polyline per fibre (`beads`: beads per fibre; `radius`: per bead).
 fn write_beads(
     path: &Path,
     beads: &[usize],
-    radii: &[f64],
+    radius: &[f64],
     states: &[BeadState],
 ) -> Result<(), String> {
     let positions: Vec<f64> = states.iter().flat_map(|s| s.position).collect();
     let velocity: Vec<f64> = states.iter().flat_map(|s| s.velocity).collect();
     let spin: Vec<f64> = states.iter().flat_map(|s| s.angular_velocity).collect();
-    let (mut radius, mut fibre, mut bead) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut fibre, mut bead) = (Vec::new(), Vec::new());
     for (f, &n) in beads.iter().enumerate() {
         for b in 0..n {
-            radius.push(radii.get(f).copied().unwrap_or(1.0));
             fibre.push(f as i64);
             bead.push(b as i64);
         }
@@ -226,7 +229,7 @@ fn write_beads(
         &[
             Array::vector("velocity", &velocity),
             Array::vector("angular_velocity", &spin),
-            Array::scalar("radius", &radius),
+            Array::scalar("radius", radius),
             int("fibre", &fibre),
             int("bead", &bead),
         ],
