@@ -30,6 +30,9 @@ pub struct Spm {
     phi: Vec<f64>,
     /// Positions the bead profiles were placed at (`None`: not placed).
     placed_at: Option<Vec<[f64; 3]>>,
+    /// [`Spm::bead_volume`] at the placed positions: summed once per placement, since the
+    /// momentum exchange reports it every step and it is on the path to the fibre node.
+    bead_volume: f64,
 }
 
 /// Rigid-body velocity V + Omega x r of a bead at offset r (2D: Omega_z only).
@@ -71,6 +74,7 @@ impl Spm {
             walls,
             phi: vec![0.0; grid.cells()],
             placed_at: None,
+            bead_volume: 0.0,
         };
         s.reset_phi();
         s
@@ -156,6 +160,13 @@ impl Spm {
             let phi = &mut self.phi;
             b.for_each(g, |i, _, p| phi[i] += p);
         }
+        self.bead_volume = {
+            let mut v = 0.0;
+            for b in &self.beads {
+                b.for_each(g, |i, _, p| v += p / self.phi[i].max(1.0));
+            }
+            v
+        };
         let mut at = self.placed_at.take().unwrap_or_default();
         at.clear();
         at.extend(states.iter().map(|s| s.position));
@@ -240,13 +251,9 @@ impl Spm {
     }
 
     /// Σ_i ∫ phi_i / max(1, phi) dV: the beads' share of the solid volume.
+    /// (0 before the first placement.)
     pub fn bead_volume(&self) -> f64 {
-        let g = self.grid;
-        let mut v = 0.0;
-        for b in &self.beads {
-            b.for_each(g, |i, _, p| v += p / self.phi[i].max(1.0));
-        }
-        v
+        self.bead_volume
     }
 }
 
