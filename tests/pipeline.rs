@@ -33,6 +33,18 @@ fn same_run(a: &std::path::Path, b: &std::path::Path, what: &str) {
         assert_eq!(ta.len(), n, "{topic}");
         assert_eq!(ta, tb, "{topic} differs: {what}");
     }
+    // The steps between the outputs report briefly; the logged ones in full.
+    for d in read_topic(&a.join("run.mcap"), "/diagnostics").unwrap() {
+        assert_full(&d);
+    }
+}
+
+/// `diagnostics` (a /diagnostics entry or the summary's) has those that a full report of the
+/// binary fluid adds to a brief one.
+fn assert_full(diagnostics: &serde_json::Value) {
+    for name in ["max_divergence", "free_energy"] {
+        assert!(diagnostics[name].is_f64(), "no {name} in {diagnostics}");
+    }
 }
 
 #[test]
@@ -221,6 +233,12 @@ fn an_interrupted_pipelined_run_resumes_to_the_same_bits() {
         return;
     }
     assert!(steps < 3000);
+    // Stopped after a step that reported in full, logged last.
+    assert_full(&summary["final_diagnostics"]);
+    let logged = read_topic(&stopped.join("run.mcap"), "/diagnostics").unwrap();
+    let last_logged = logged.last().unwrap();
+    assert_eq!(last_logged["step"].as_u64(), Some(steps));
+    assert_full(last_logged);
     let ck = stopped.join("checkpoint");
     let resumed = run_scene(
         "pipeline-resumed",

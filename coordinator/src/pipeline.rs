@@ -37,7 +37,7 @@
 //! (docs/performance.md).
 use crate::links::LinkFailure;
 use crate::runner::{fail, node_failed, Node, RunError};
-use cosim::{Awaited, Command, Phase, PhaseOrder, PhaseReport, Port, Reply};
+use cosim::{Awaited, Command, FullReports, Phase, PhaseOrder, PhaseReport, Port, Reply};
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
@@ -103,8 +103,9 @@ impl Batches {
         b
     }
 
-    /// The batch of node `o` for `count` steps from `step`.
-    fn batch(&self, o: usize, step: u64, count: u64) -> Command {
+    /// The batch of node `o` for `count` steps from `step`, reporting in full where `full`
+    /// says.
+    fn batch(&self, o: usize, (step, count): (u64, u64), full: FullReports) -> Command {
         let list = &self
             .per_node
             .iter()
@@ -126,6 +127,7 @@ impl Batches {
             step,
             phases,
             steps: count,
+            full_reports: full,
         }
     }
 
@@ -156,7 +158,7 @@ impl Batches {
     }
 
     /// Run `count` steps from `step`: send every node its batch (unless it went out with the
-    /// step before), collect the replies. With `send_next` (one step only), the nodes that
+    /// step before), reporting in full where `full` says, collect the replies. With `send_next` (one step only), the nodes that
     /// can start the next step alone get its batch now too; the caller must then run that
     /// step. Returns the phases' reports in schedule order, step by step, adds each phase's
     /// time inside its node to `seconds` and the time it waited there for its input to
@@ -164,8 +166,7 @@ impl Batches {
     /// done: the step a node failed at, or the batch's first step if that is all it is known.
     pub(crate) fn run_steps(
         &mut self,
-        step: u64,
-        count: u64,
+        (step, count, full): (u64, u64, FullReports),
         send_next: bool,
         nodes: &mut [Node],
         (seconds, waiting): (&mut BTreeMap<String, f64>, &mut BTreeMap<String, f64>),
@@ -195,13 +196,13 @@ impl Batches {
                 continue;
             }
             let link = &mut nodes[*o].link;
-            link.send(&self.batch(*o, step, count))
+            link.send(&self.batch(*o, (step, count), full))
                 .map_err(|e| failed(link.name(), e))?;
         }
         if send_next && count == 1 && !self.early.is_empty() {
             for &o in &self.early {
                 let link = &mut nodes[o].link;
-                link.send(&self.batch(o, step + 1, 1))
+                link.send(&self.batch(o, (step + 1, 1), full))
                     .map_err(|e| at_first(node_failed(link.name(), step + 1, "", e)))?;
             }
             self.sent_early = Some(step + 1);

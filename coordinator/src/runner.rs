@@ -606,6 +606,14 @@ fn drive(
         }
     }
     let rests = scene.scene.time.rest_tolerance.is_some();
+    // Diagnostics that cost a pass of their own (the fluid's divergence, a droplet's radius
+    // and pressure) are asked for only where the log or the run's end needs them: at the
+    // logged steps and the last, and at every step of a run that may stop at rest or was
+    // interrupted. A run stops only after a step reported in full.
+    let full_reports = |interrupted: bool| cosim::FullReports {
+        every: if rests || interrupted { 1 } else { interval },
+        last: steps.checked_sub(1),
+    };
     // Reports of the steps the nodes ran ahead of the loop in a multi-step batch, and the wall
     // time of one step of the last batch (how many steps the next may hold).
     let mut ahead: std::collections::VecDeque<Vec<PhaseReport>> = Default::default();
@@ -620,6 +628,7 @@ fn drive(
             && (fields_every == 0 || (step + 1) % fields_every != 0)
             && !INTERRUPTED.load(Ordering::SeqCst);
         let mut next_sent = false;
+        let full = full_reports(INTERRUPTED.load(Ordering::SeqCst));
         let reports = match &mut batches {
             Some(_) if !ahead.is_empty() => ahead.pop_front().expect("not empty"),
             Some(b) if step > first_step => {
@@ -645,8 +654,7 @@ fn drive(
                 let t0 = Instant::now();
                 let mut reports = b
                     .run_steps(
-                        step,
-                        count,
+                        (step, count, full),
                         send_next,
                         nodes,
                         (&mut st.seconds_per_phase, &mut st.seconds_waiting),
@@ -663,7 +671,7 @@ fn drive(
                 reports.pop().expect("a report per step")
             }
             _ => run_step_lock_step(
-                step,
+                (step, full.detail(step)),
                 &plan.schedule,
                 &owner,
                 nodes,
@@ -673,6 +681,7 @@ fn drive(
         // The nodes are past this step: it cannot be the last.
         next_sent |= !ahead.is_empty();
         let mut report: Vec<(String, f64)> = Vec::new();
+        let in_full = reports.iter().all(|r| r.detail == cosim::Detail::Full);
         for r in reports {
             // One value per name: a later phase's report replaces an earlier one's.
             for (k, v) in r.diagnostics {
@@ -698,8 +707,9 @@ fn drive(
             .time
             .rest_tolerance
             .is_some_and(|tol| is_at_rest(&st.last_diagnostics, tol, load_scale));
-        // With the next step's batch out, Ctrl-C ends the run after that step.
-        let stop = INTERRUPTED.load(Ordering::SeqCst) && !next_sent;
+        // With the next step's batch out, Ctrl-C ends the run after that step; after a brief
+        // report, after the next, which reports in full.
+        let stop = INTERRUPTED.load(Ordering::SeqCst) && !next_sent && in_full;
         // By step: with the next batches out, the fibre node may have published step n + 2's.
         if track {
             exchange
@@ -848,7 +858,7 @@ fn batch_steps(
 /// One step with one phase at a time: the coordinator hands each phase to its node and waits
 /// for the reply. Returns the phases' reports in schedule order.
 fn run_step_lock_step(
-    step: u64,
+    (step, detail): (u64, cosim::Detail),
     schedule: &[Phase],
     owner: &[usize],
     nodes: &mut [Node],
@@ -859,7 +869,11 @@ fn run_step_lock_step(
         let t0 = Instant::now();
         let node = &mut nodes[o].link;
         let reply = node
-            .call(&Command::RunPhase { step, phase })
+            .call(&Command::RunPhase {
+                step,
+                phase,
+                detail,
+            })
             .map_err(|e| node_failed(node.name(), step, &format!("phase {phase}: "), e))?;
         *seconds.entry(phase.name().to_string()).or_default() += t0.elapsed().as_secs_f64();
         if let Reply::PhaseDone(r) = reply {

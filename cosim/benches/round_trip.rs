@@ -152,6 +152,7 @@ impl Component for Idle {
     ) -> Result<PhaseReport, ComponentError> {
         Ok(PhaseReport {
             diagnostics: vec![("step".into(), step as f64)],
+            detail: Default::default(),
         })
     }
     fn save_state(&self) -> Result<Vec<u8>, ComponentError> {
@@ -176,6 +177,7 @@ fn control_round_trip(c: &mut Criterion) {
             let command = Command::RunPhase {
                 step,
                 phase: Phase::FibrePositions,
+                detail: Default::default(),
             };
             let reply = client.call(&command).unwrap();
             assert!(matches!(reply, Reply::PhaseDone(_)));

@@ -1,7 +1,7 @@
 //! The trait every node implements, and the one function that maps a command onto it.
 //! Both transports (iceoryx2 and in-process) call [`dispatch`], so a component behaves the
 //! same, bit for bit, whichever way it is linked.
-use crate::{Command, Configured, Exchange, ModelDescription, Phase, PhaseReport, Reply};
+use crate::{Command, Configured, Detail, Exchange, ModelDescription, Phase, PhaseReport, Reply};
 
 /// An error a component reports to the user: one clear sentence, no panic.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -42,6 +42,20 @@ pub trait Component {
         phase: Phase,
         exchange: &mut dyn Exchange,
     ) -> Result<PhaseReport, ComponentError>;
+
+    /// [`Component::run_phase`], reporting with `detail`: a component whose reports include
+    /// diagnostics that cost a pass of their own leaves them out of a [`Detail::Brief`]
+    /// report. Default: every report in full.
+    fn run_phase_with(
+        &mut self,
+        step: u64,
+        phase: Phase,
+        detail: Detail,
+        exchange: &mut dyn Exchange,
+    ) -> Result<PhaseReport, ComponentError> {
+        let _ = detail;
+        self.run_phase(step, phase, exchange)
+    }
 
     /// The full state, serialised, such that `restore_state` brings it back exactly.
     fn save_state(&self) -> Result<Vec<u8>, ComponentError>;
@@ -88,10 +102,14 @@ pub fn dispatch(
             ),
             false,
         ),
-        Command::RunPhase { step, phase } => (
+        Command::RunPhase {
+            step,
+            phase,
+            detail,
+        } => (
             as_reply(
                 component
-                    .run_phase(step, phase, exchange)
+                    .run_phase_with(step, phase, detail, exchange)
                     .map(Reply::PhaseDone),
             ),
             false,

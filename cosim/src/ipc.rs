@@ -360,7 +360,13 @@ mod tests {
     /// short one makes it poll again; kinds are told apart by the phase before them.
     #[test]
     fn long_waits_block_at_once_the_next_step() {
-        let after = |phase| wait_kind(&Command::RunPhase { step: 3, phase });
+        let after = |phase| {
+            wait_kind(&Command::RunPhase {
+                step: 3,
+                phase,
+                detail: Default::default(),
+            })
+        };
         let (a, b) = (after(Phase::FibrePositions), after(Phase::FluidPenalty));
         assert!(a != b && a != wait_kind(&Command::SaveState) && a < WAIT_KINDS);
         let mut p = Poller::default();

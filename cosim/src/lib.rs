@@ -30,5 +30,7 @@ pub use component::{dispatch, Component, ComponentError};
 pub use description::{ModelDescription, ParameterDescription, PortDescription};
 pub use exchange::{Exchange, ExchangeHeader, InProcessExchange, Port};
 pub use phase::Phase;
-pub use protocol::{Awaited, Command, Configured, PhaseOrder, PhaseReport, Reply, TimedReport};
+pub use protocol::{
+    Awaited, Command, Configured, Detail, FullReports, PhaseOrder, PhaseReport, Reply, TimedReport,
+};
 pub use types::{BeadForce, BeadImpulse, BeadState};

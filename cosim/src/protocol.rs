@@ -12,8 +12,13 @@ pub enum Command {
     /// Read the scene (full TOML text; the node reads its own sections), build the initial
     /// state, check the time step, and publish the initial bead states.
     Configure { scene_toml: String },
-    /// Run one phase of one step.
-    RunPhase { step: u64, phase: Phase },
+    /// Run one phase of one step, reporting with `detail` (in full when absent).
+    RunPhase {
+        step: u64,
+        phase: Phase,
+        #[serde(default)]
+        detail: Detail,
+    },
     /// Run several phases of one step in order, each after its input has arrived from
     /// another node (pipelined schedule; served over iceoryx2 only), and the same phases for
     /// the `steps - 1` steps after it: step `step + j` awaits each input `j` steps later than
@@ -25,6 +30,9 @@ pub enum Command {
         /// How many consecutive steps, at least 1.
         #[serde(default = "one_step")]
         steps: u64,
+        /// Which of the steps report in full (all of them when absent).
+        #[serde(default)]
+        full_reports: FullReports,
     },
     /// Answer with the full state, serialised (checkpoint).
     SaveState,
@@ -41,6 +49,53 @@ pub enum Command {
 
 fn one_step() -> u64 {
     1
+}
+
+/// How much a phase reports ([`PhaseReport`]).
+///
+/// Some diagnostics are checks for the log that cost a pass over a field (the fluid's
+/// largest divergence costs an inverse transform, 10-15 % of a 2D SPM step): the coordinator
+/// asks for them only at the steps it logs or may end at, and for the others asks for a brief
+/// report.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Detail {
+    /// Every diagnostic the node has for the phase.
+    #[default]
+    Full,
+    /// At least what the node checks each step anyway (a fluid's speed for its CFL abort) and
+    /// what comes free with the step; the node leaves out what costs a pass of its own.
+    Brief,
+}
+
+/// Which steps of a [`Command::RunPhases`] batch report in full ([`Detail::Full`]): step
+/// `s` (n -> n+1) does if `every` divides `s + 1` or `s` is `last`; the others report
+/// briefly. The default, `every = 1`, reports every step in full.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FullReports {
+    /// At least 1 (0 is read as 1).
+    pub every: u64,
+    pub last: Option<u64>,
+}
+
+impl Default for FullReports {
+    fn default() -> Self {
+        Self {
+            every: 1,
+            last: None,
+        }
+    }
+}
+
+impl FullReports {
+    /// The detail of step `step`'s reports.
+    pub fn detail(&self, step: u64) -> Detail {
+        if (step + 1).is_multiple_of(self.every.max(1)) || self.last == Some(step) {
+            Detail::Full
+        } else {
+            Detail::Brief
+        }
+    }
 }
 
 /// One phase of a [`Command::RunPhases`] batch.
@@ -115,6 +170,10 @@ pub struct Configured {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 pub struct PhaseReport {
     pub diagnostics: Vec<(String, f64)>,
+    /// [`Detail::Brief`] if the node left diagnostics out; a node that always reports in full
+    /// says [`Detail::Full`] whatever it was asked.
+    #[serde(default)]
+    pub detail: Detail,
 }
 
 impl Command {
@@ -132,5 +191,55 @@ impl Reply {
     }
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, String> {
         serde_json::from_slice(bytes).map_err(|e| format!("malformed reply: {e}"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn full_reports_name_the_multiples_of_every_and_the_last_step() {
+        let f = FullReports {
+            every: 5,
+            last: Some(12),
+        };
+        let full: Vec<u64> = (0..20).filter(|&s| f.detail(s) == Detail::Full).collect();
+        // Steps n -> n+1 with n + 1 = 5, 10, 15, 20, and step 12 (the last).
+        assert_eq!(full, vec![4, 9, 12, 14, 19]);
+        let all = FullReports::default();
+        assert!((0..20).all(|s| all.detail(s) == Detail::Full));
+        let zero = FullReports {
+            every: 0,
+            last: None,
+        };
+        assert!((0..20).all(|s| zero.detail(s) == Detail::Full));
+    }
+
+    /// Commands and reports without the detail fields read as full reports.
+    #[test]
+    fn absent_detail_reads_as_full() {
+        let c = Command::from_bytes(br#"{"run-phase":{"step":3,"phase":"fluid-penalty"}}"#);
+        assert_eq!(
+            c.unwrap(),
+            Command::RunPhase {
+                step: 3,
+                phase: Phase::FluidPenalty,
+                detail: Detail::Full
+            }
+        );
+        let c = Command::from_bytes(br#"{"run-phases":{"step":3,"phases":[]}}"#).unwrap();
+        let Command::RunPhases { full_reports, .. } = c else {
+            panic!("{c:?}")
+        };
+        assert_eq!(full_reports, FullReports::default());
+        let r: PhaseReport = serde_json::from_str(r#"{"diagnostics":[["a",1.0]]}"#).unwrap();
+        assert_eq!(r.detail, Detail::Full);
+        let brief = Command::RunPhase {
+            step: 1,
+            phase: Phase::FluidPenalty,
+            detail: Detail::Brief,
+        };
+        assert_eq!(Command::from_bytes(&brief.to_bytes()).unwrap(), brief);
     }
 }

@@ -132,6 +132,7 @@ impl Component for ToyFibre {
             .sum();
         Ok(PhaseReport {
             diagnostics: vec![("kinetic energy".into(), energy)],
+            detail: Default::default(),
         })
     }
 
@@ -231,6 +232,7 @@ impl Component for ToyFluid {
                 ("total impulse".into(), total),
                 ("phases".into(), self.phases_run as f64),
             ],
+            detail: Default::default(),
         })
     }
 
@@ -320,7 +322,14 @@ fn step(c: &mut dyn Coordinator, n: u64, log: &mut Vec<String>) {
     ] {
         log.push(format!(
             "{:?}",
-            c.call(node, Command::RunPhase { step: n, phase })
+            c.call(
+                node,
+                Command::RunPhase {
+                    step: n,
+                    phase,
+                    detail: Default::default(),
+                }
+            )
         ));
     }
     let (h, states) = c.read_states();
@@ -468,6 +477,7 @@ fn late_subscriber_gets_latest_publication_from_a_serving_node() {
             .call(&Command::RunPhase {
                 step: n,
                 phase: Phase::FibrePositions,
+                detail: Default::default(),
             })
             .unwrap();
         // A reader that arrives after the publication.
@@ -696,6 +706,7 @@ fn a_late_reply_after_a_timeout_is_not_mistaken_for_the_next_one() {
         .call(&Command::RunPhase {
             step: 1,
             phase: Phase::FibrePositions,
+            detail: Default::default(),
         })
         .unwrap_err();
     assert!(matches!(err, LinkError::Timeout { .. }), "{err:?}");

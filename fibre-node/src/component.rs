@@ -170,6 +170,8 @@ impl Run {
                 .zip(values)
                 .map(|(n, v)| (n.to_string(), v))
                 .collect(),
+            // Sums over the beads, a small part of a step: always full.
+            detail: cosim::Detail::Full,
         }
     }
 

@@ -9,9 +9,10 @@
 //! - 2D 256 x 200 with an 18-bead chain of r_b = 6, a droplet of R = 50 (xi = 2, xi_c = 5);
 //! - 3D 128 x 120 x 120 with a 10-bead chain of r_b = 6, a droplet of R = 30.
 //!
-//! The free energy and the droplet diagnostics (pressure, radius) run only at reporting
-//! steps: the scene gives no `time.steps`, so never here. Throughput is per grid cell.
-use cosim::{Component, Exchange, InProcessExchange, Phase, Port};
+//! The reports are brief (`cosim::Detail::Brief`), as at every step a run does not log: no
+//! free energy, droplet diagnostics (pressure, radius) or divergence. Throughput is per grid
+//! cell.
+use cosim::{Component, Detail, Exchange, InProcessExchange, Phase, Port};
 use criterion::{criterion_group, criterion_main, Criterion};
 use fluid_node::FluidComponent;
 #[path = "common/pool_thread.rs"]
@@ -43,7 +44,9 @@ fn bench_case(c: &mut Criterion, name: &str, dims: usize, grid: [usize; 3], bead
                 let at_n = chain(beads, centre, dims, n);
                 let at_n1 = chain(beads, centre, dims, n + 1);
                 x.publish_states(Port::BeadStates, n, &at_n).unwrap();
-                let pf = comp.run_phase(n, Phase::FluidPhaseField, &mut x).unwrap();
+                let pf = comp
+                    .run_phase_with(n, Phase::FluidPhaseField, Detail::Brief, &mut x)
+                    .unwrap();
                 let r = exchange_and_penalty(&mut comp, &mut x, n, &at_n1, &mut imp);
                 n += 1;
                 std::hint::black_box((pf, r))

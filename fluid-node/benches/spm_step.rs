@@ -1,7 +1,8 @@
 //! Time of one coupled-like SPM step of the fluid node: bead states published, momentum
 //! exchange (build phi, u* with advection and exact viscous decay, impulses), impulses read,
 //! states published again, penalty and projection, diagnostics. Bead states are prescribed
-//! (a straight chain moving slowly), so no fibre node runs.
+//! (a straight chain moving slowly), so no fibre node runs. The reports are brief
+//! (`cosim::Detail::Brief`, no divergence), as at every step a run does not log.
 //!
 //! - 2D 256 x 200 with an 18-bead chain of r_b = 6 (L2020's droplet case, xi = 2, xi_c = 5);
 //! - 3D 128 x 120 x 120 with a 10-bead chain of r_b = 6 (L2020's 3D grid, xi = 2, xi_c = 5).

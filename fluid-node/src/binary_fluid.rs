@@ -28,13 +28,14 @@ use crate::grid::Grid;
 use crate::spectral_ns::SpectralNs;
 use crate::spm::Spm;
 use crate::stability::TimeStepLimit;
+use cosim::Detail;
 use rustfft::num_complex::Complex64;
 pub use scene::{BinaryConfig, InitialPsi};
 
-/// Diagnostics after `fluid-phase-field`, in their fixed order (`free_energy` only at
-/// reporting steps); with a flat initial interface [`INTERFACE_DIAGNOSTICS`] follow, and with beads besides
-/// [`CONTACT_ANGLE_DIAGNOSTICS`]; with an initial droplet, at reporting steps,
-/// [`droplet::DROPLET_DIAGNOSTICS`].
+/// Diagnostics after `fluid-phase-field`, in their fixed order (`free_energy` only in a full
+/// report, [`cosim::Detail`]); with a flat initial interface [`INTERFACE_DIAGNOSTICS`] follow,
+/// and with beads besides [`CONTACT_ANGLE_DIAGNOSTICS`]; with an initial droplet, in a full
+/// report, [`droplet::DROPLET_DIAGNOSTICS`].
 pub const PHASE_FIELD_DIAGNOSTICS: [&str; 3] = ["mean_psi", "max_abs_psi", "free_energy"];
 /// Position of the flat interface (along its normal, grid units) away from bead 0.
 pub const INTERFACE_DIAGNOSTICS: [&str; 1] = ["interface_position"];
@@ -77,9 +78,7 @@ pub struct BinaryFluid {
     uniform: bool,
     /// Capillary force density per component (mass / (length² time²)).
     force: Vec<Vec<f64>>,
-    /// The steps whose diagnostics the coordinator logs (droplet diagnostics only then).
-    reporting: droplet::Reporting,
-    /// Scratch of the droplet diagnostics, allocated at the first reporting step.
+    /// Scratch of the droplet diagnostics, allocated at the first full report.
     droplet: Option<droplet::Scratch>,
 }
 
@@ -148,14 +147,8 @@ impl BinaryFluid {
             bead_psi_star,
             wall_psi_star,
             uniform,
-            reporting: droplet::Reporting::default(),
             droplet: None,
         })
-    }
-
-    /// Compute the whole-field droplet diagnostics only at the steps `reporting` names.
-    pub fn set_reporting(&mut self, reporting: droplet::Reporting) {
-        self.reporting = reporting;
     }
 
     pub fn config(&self) -> &BinaryConfig {
@@ -251,9 +244,12 @@ impl BinaryFluid {
         &self.force
     }
 
-    /// Diagnostics after `fluid-phase-field` of step `step` (names and values, see
-    /// [`PHASE_FIELD_DIAGNOSTICS`]); `spm` gives bead 0 for the contact angle.
-    pub fn report(&mut self, spm: &Spm, step: u64) -> Vec<(String, f64)> {
+    /// Diagnostics after `fluid-phase-field` (names and values, see
+    /// [`PHASE_FIELD_DIAGNOSTICS`]); `spm` gives bead 0 for the contact angle. The free
+    /// energy and the droplet's diagnostics cost whole-field passes of their own (the droplet's
+    /// about two phase-field steps): only a full report has them.
+    pub fn report(&mut self, spm: &Spm, detail: Detail) -> Vec<(String, f64)> {
+        let full = detail == Detail::Full;
         let mean = self.ch.mean_psi();
         let max_abs = self.ch.max_abs_psi();
         let mut out: Vec<(String, f64)> = PHASE_FIELD_DIAGNOSTICS[..2]
@@ -261,8 +257,8 @@ impl BinaryFluid {
             .zip([mean, max_abs])
             .map(|(n, v)| (n.to_string(), v))
             .collect();
-        // The free energy costs a transform of the gradient; only logged steps need it.
-        if self.reporting.due(step) {
+        // The free energy costs a transform of the gradient.
+        if full {
             let energy = self.ch.free_energy().total;
             out.push((PHASE_FIELD_DIAGNOSTICS[2].to_string(), energy));
         }
@@ -303,9 +299,7 @@ impl BinaryFluid {
                 out.push((CONTACT_ANGLE_DIAGNOSTICS[1].into(), angle));
             }
         }
-        if let (&InitialPsi::Droplet { inside, .. }, true) =
-            (&self.cfg.initial, self.reporting.due(step))
-        {
+        if let (&InitialPsi::Droplet { inside, .. }, true) = (&self.cfg.initial, full) {
             let g = self.ch.grid();
             let scratch = self.droplet.get_or_insert_with(|| droplet::Scratch::new(g));
             if let Some(d) = droplet::measure(&mut self.ch, inside, scratch) {

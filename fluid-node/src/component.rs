@@ -23,15 +23,15 @@ use crate::stability::{self, CFL_ABORT};
 use crate::walls::Walls;
 use cosim::description::{parameter as param, ModelDescription, PortDescription};
 use cosim::{
-    effects, BeadImpulse, BeadState, Component, ComponentError, Configured, Exchange, Phase,
-    PhaseReport, Port,
+    effects, BeadImpulse, BeadState, Component, ComponentError, Configured, Detail, Exchange,
+    Phase, PhaseReport, Port,
 };
 use rustfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
-/// Diagnostics after `fluid-penalty`, in their fixed order; with walls
-/// [`COUETTE_DIAGNOSTIC`] follows.
+/// Diagnostics after `fluid-penalty`, in their fixed order (`max_divergence` in a full report
+/// only, [`cosim::Detail`]); with walls, in a full report, [`COUETTE_DIAGNOSTIC`] follows.
 pub const DIAGNOSTICS: [&str; 7] = [
     "fluid_kinetic_energy",
     "max_fluid_speed",
@@ -130,6 +130,7 @@ impl FluidComponent {
         &mut self,
         step: u64,
         phase: Phase,
+        detail: Detail,
         exchange: &mut dyn Exchange,
     ) -> Result<PhaseReport, ComponentError> {
         if let Some(fpd) = self.fpd.as_mut() {
@@ -174,7 +175,8 @@ impl FluidComponent {
                     .map_err(|e| ComponentError(format!("{e} (at step {step})")))?;
                 run.psi_step = Some(step);
                 Ok(PhaseReport {
-                    diagnostics: b.report(spm, step),
+                    diagnostics: b.report(spm, detail),
+                    detail,
                 })
             }
             Phase::FluidMomentumExchange => {
@@ -230,6 +232,7 @@ impl FluidComponent {
                         .zip(values)
                         .map(|(n, v)| (n.to_string(), v))
                         .collect(),
+                    detail: Detail::Full,
                 })
             }
             Phase::FluidPenalty => {
@@ -249,7 +252,7 @@ impl FluidComponent {
                         .add_projected(|c, u_c, out| spm.penalty(c, u_c, states, out));
                 }
                 run.pending = None;
-                run.report(step)
+                run.report(step, detail)
             }
             other => Err(ComponentError(format!(
                 "fluid-node: phase {other} does not belong to fluid.method = \"spm\" (it \
@@ -338,11 +341,13 @@ impl Run {
         Ok(())
     }
 
-    fn report(&mut self, step: u64) -> Result<PhaseReport, ComponentError> {
+    /// The penalty's diagnostics ([`DIAGNOSTICS`], then [`COUETTE_DIAGNOSTIC`] with walls); a
+    /// brief report leaves out `max_divergence` (an inverse transform, 10-15 % of a 2D step)
+    /// and the Couette error (a pass over one component).
+    fn report(&mut self, step: u64, detail: Detail) -> Result<PhaseReport, ComponentError> {
         let rho = self.cfg.density;
         let dt = self.cfg.dt;
-        let ke = self.ns.kinetic_energy(rho);
-        let vmax = self.ns.max_speed();
+        let (ke, vmax) = self.ns.energy_and_max_speed(rho);
         let cfl = vmax * dt;
         if cfl.is_nan() || cfl > CFL_ABORT {
             return Err(ComponentError(format!(
@@ -351,11 +356,16 @@ impl Run {
                  time.dt or the driving (fluid.body_force, walls.velocity)"
             )));
         }
-        let div = self.ns.max_divergence();
+        let full = detail == Detail::Full;
+        let div = if full { self.ns.max_divergence() } else { 0.0 };
         let mean = self.ns.mean_velocity();
         let mut values = vec![ke, vmax, cfl, div, mean[0], mean[1], mean[2]];
         let mut names: Vec<&str> = DIAGNOSTICS.to_vec();
-        if let Some(w) = self.spm.walls() {
+        if !full {
+            values.remove(3);
+            names.remove(3);
+        }
+        if let (Some(w), true) = (self.spm.walls(), full) {
             self.ns.plane_average(0, &mut self.profile);
             values.push(w.couette_error(&self.profile));
             names.push(COUETTE_DIAGNOSTIC);
@@ -366,6 +376,7 @@ impl Run {
                 .zip(values)
                 .map(|(n, v)| (n.to_string(), v))
                 .collect(),
+            detail,
         })
     }
 }
@@ -560,9 +571,8 @@ impl Component for FluidComponent {
                     .iter()
                     .flat_map(|f| std::iter::repeat_n(f.affinity, f.beads))
                     .collect();
-                let mut fluid = BinaryFluid::new(grid, b, &psi0, cfg.walls.is_some())
+                let fluid = BinaryFluid::new(grid, b, &psi0, cfg.walls.is_some())
                     .map_err(ComponentError)?;
-                fluid.set_reporting(crate::binary_fluid::droplet::Reporting::from_scene(&table));
                 limits.extend(
                     fluid
                         .check_time_step(stability::initial_speed(&cfg), cfg.density, cfg.viscosity)
@@ -669,11 +679,21 @@ impl Component for FluidComponent {
         phase: Phase,
         exchange: &mut dyn Exchange,
     ) -> Result<PhaseReport, ComponentError> {
+        self.run_phase_with(step, phase, Detail::Full, exchange)
+    }
+
+    fn run_phase_with(
+        &mut self,
+        step: u64,
+        phase: Phase,
+        detail: Detail,
+        exchange: &mut dyn Exchange,
+    ) -> Result<PhaseReport, ComponentError> {
         if let Some(g) = self.fixed_grain {
             crate::parallel::set_grain(g);
         }
         let started = std::time::Instant::now();
-        let report = self.run_phase_untimed(step, phase, exchange);
+        let report = self.run_phase_untimed(step, phase, detail, exchange);
         self.step_seconds += started.elapsed().as_secs_f64();
         // The step's last phase: the penalty (SPM) or the lattice step (FPD).
         if matches!(phase, Phase::FluidPenalty | Phase::FluidLatticeStep) {

@@ -617,7 +617,11 @@ impl FpdRun {
                 self.couette_error(b, t),
             ));
         }
-        Ok(PhaseReport { diagnostics })
+        // Nothing here costs a pass of its own: every report is full.
+        Ok(PhaseReport {
+            diagnostics,
+            detail: cosim::Detail::Full,
+        })
     }
 
     /// Largest deviation of the row-averaged x-velocity from the Couette profile between the

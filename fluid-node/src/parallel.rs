@@ -76,11 +76,11 @@ pub fn for_each_row<T: Send>(
 
 /// `out[r] = f(r)` for every row index `r < rows` (of `row_len` elements), in parallel.
 /// `out` keeps its capacity, so a buffer reserved once is never reallocated.
-pub fn per_row(
-    out: &mut Vec<f64>,
+pub fn per_row<T: Send>(
+    out: &mut Vec<T>,
     rows: usize,
     row_len: usize,
-    f: impl Fn(usize) -> f64 + Sync + Send,
+    f: impl Fn(usize) -> T + Sync + Send,
 ) {
     (0..rows)
         .into_par_iter()

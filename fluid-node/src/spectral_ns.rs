@@ -47,6 +47,8 @@ pub struct SpectralNs {
     tmp_hat: Vec<Complex64>,
     scratch: Vec<f64>,
     partials: Vec<f64>,
+    /// Per-row pairs (energy and largest squared speed) of [`SpectralNs::energy_and_max_speed`].
+    row_pairs: Vec<(f64, f64)>,
     /// Transformed force density over density `f̂/ρ` per component (binary fluids only;
     /// empty until [`SpectralNs::enable_force_density`]).
     force_hat: Vec<Vec<Complex64>>,
@@ -87,6 +89,7 @@ impl SpectralNs {
             tmp_hat: vec![Complex64::default(); grid.modes()],
             scratch: vec![0.0; grid.cells()],
             partials: Vec::with_capacity(grid.rows()),
+            row_pairs: Vec::with_capacity(grid.rows()),
             force_hat: Vec::new(),
         }
     }
@@ -353,27 +356,24 @@ impl SpectralNs {
 
     /// Kinetic energy `ρ/2 Σ |u|²` over all cells (cell volume 1).
     pub fn kinetic_energy(&mut self, rho: f64) -> f64 {
-        let g = self.grid;
-        let u = &self.u;
-        per_row(&mut self.partials, g.rows(), g.nx, |r| {
-            let mut s = 0.0;
-            for comp in u {
-                for v in &comp[r * g.nx..(r + 1) * g.nx] {
-                    s += v * v;
-                }
-            }
-            s
-        });
-        0.5 * rho * ordered_sum(&self.partials)
+        self.energy_and_max_speed(rho).0
     }
 
     /// Largest speed `|u|` over all nodes.
     pub fn max_speed(&mut self) -> f64 {
+        self.energy_and_max_speed(1.0).1
+    }
+
+    /// [`SpectralNs::kinetic_energy`] and [`SpectralNs::max_speed`] in one pass over the
+    /// field: each row is read for the largest speed and again, from cache, for the energy,
+    /// whose row sums keep the component-major order.
+    pub fn energy_and_max_speed(&mut self, rho: f64) -> (f64, f64) {
         let g = self.grid;
         let u = &self.u;
-        per_row(&mut self.partials, g.rows(), g.nx, |r| {
+        per_row(&mut self.row_pairs, g.rows(), g.nx, |r| {
+            let row = r * g.nx..(r + 1) * g.nx;
             let mut m: f64 = 0.0;
-            for i in r * g.nx..(r + 1) * g.nx {
+            for i in row.clone() {
                 let mut s = 0.0;
                 for comp in u {
                     s += comp[i] * comp[i];
@@ -381,18 +381,23 @@ impl SpectralNs {
                 // NaN propagates into the maximum so that a broken field is seen.
                 m = if s.is_nan() { f64::NAN } else { m.max(s) };
             }
-            m
-        });
-        self.partials
-            .iter()
-            .fold(0.0f64, |a, &b| {
-                if b.is_nan() || a.is_nan() {
-                    f64::NAN
-                } else {
-                    a.max(b)
+            let mut e = 0.0;
+            for comp in u {
+                for v in &comp[row.clone()] {
+                    e += v * v;
                 }
-            })
-            .sqrt()
+            }
+            (e, m)
+        });
+        let energy = self.row_pairs.iter().fold(0.0, |a, (e, _)| a + e);
+        let max2 = self.row_pairs.iter().fold(0.0f64, |a, &(_, b)| {
+            if b.is_nan() || a.is_nan() {
+                f64::NAN
+            } else {
+                a.max(b)
+            }
+        });
+        (0.5 * rho * energy, max2.sqrt())
     }
 
     /// Mean velocity over the box (the mean mode).

@@ -304,3 +304,69 @@ fn fluid_alone_runs_without_bead_states_and_initial_couette_is_steady() {
     assert!(diag(&last, "max_divergence") < 1e-15);
     assert!((diag(&last, "max_fluid_speed") - 0.01).abs() < 1e-3);
 }
+
+/// A brief report (`cosim::Detail::Brief`, asked for at the steps a run does not log) leaves
+/// out exactly the diagnostics that cost a pass of their own (the divergence, the Couette
+/// error, the free energy and the droplet's), keeps the others bit for bit and changes no bit
+/// of the flow or the phase field.
+#[test]
+fn brief_reports_leave_out_the_costly_diagnostics_and_change_nothing_else() {
+    use cosim::Detail;
+    let scene = "dimensions = 2\n[time]\ndt = 0.5\nsteps = 12\n[fluid]\nmethod = \"spm\"\n\
+                 grid = [32, 32]\nviscosity = 0.5\nxi = 2\nxi_cutoff = 5\n\
+                 [fluid.binary]\ne0 = 0.05\nmobility = 1\ninitial = \"droplet\"\n\
+                 centre = [16, 16]\nradius = 8\n[walls]\nvelocity = [0, 0.01]\n";
+    let (mut full, mut xf, _) = configure(scene);
+    let (mut brief, mut xb, _) = configure(scene);
+    let phases = [
+        Phase::FluidPhaseField,
+        Phase::FluidMomentumExchange,
+        Phase::FluidPenalty,
+    ];
+    let left_out = [
+        "max_divergence",
+        COUETTE_DIAGNOSTIC,
+        "free_energy",
+        "droplet_radius",
+        "pressure_jump",
+        "pressure_jump_mu",
+    ];
+    let mut seen = Vec::new();
+    for n in 0..12 {
+        // Full at every third step, as at logged steps.
+        let detail = if n % 3 == 2 {
+            Detail::Full
+        } else {
+            Detail::Brief
+        };
+        for phase in phases {
+            let f = full.run_phase(n, phase, &mut xf).unwrap();
+            let b = brief.run_phase_with(n, phase, detail, &mut xb).unwrap();
+            assert_eq!(f.detail, Detail::Full);
+            if detail == Detail::Full || phase == Phase::FluidMomentumExchange {
+                assert_eq!(b, f, "step {n}, {phase}");
+                continue;
+            }
+            assert_eq!(b.detail, Detail::Brief);
+            let kept: Vec<_> = f
+                .diagnostics
+                .iter()
+                .filter(|(k, _)| !left_out.contains(&k.as_str()))
+                .cloned()
+                .collect();
+            assert_eq!(b.diagnostics, kept, "step {n}, {phase}");
+            for (k, _) in &f.diagnostics {
+                if left_out.contains(&k.as_str()) && !seen.contains(k) {
+                    seen.push(k.clone());
+                }
+            }
+        }
+    }
+    // Every costly diagnostic was there in full and left out in brief.
+    seen.sort();
+    let mut expected = left_out.map(String::from).to_vec();
+    expected.sort();
+    assert_eq!(seen, expected);
+    // The whole saved state: the flow's and the phase field's spectra.
+    assert_eq!(full.save_state().unwrap(), brief.save_state().unwrap());
+}

@@ -1,6 +1,6 @@
 //! The node side: answer the coordinator's commands until `Shutdown`.
 use super::{control_service, event_service, IpcError, IpcExchange, Names, BLOCK_SLICE};
-use crate::{Awaited, Command, Component, PhaseOrder, Reply, TimedReport};
+use crate::{Awaited, Command, Component, FullReports, PhaseOrder, Reply, TimedReport};
 use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::node::NodeState;
 use iceoryx2::port::listener::Listener;
@@ -75,6 +75,7 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
                         step,
                         phases,
                         steps,
+                        full_reports,
                     } => {
                         let mut batch = Batch {
                             server: &server,
@@ -87,7 +88,13 @@ pub fn serve(component: &mut dyn Component, prefix: &str, node_name: &str) -> Re
                             queue: &mut queue,
                             prefix,
                         };
-                        let reply = batch.run(component, &mut exchange, step, steps, &phases)?;
+                        let reply = batch.run(
+                            component,
+                            &mut exchange,
+                            (step, steps),
+                            full_reports,
+                            &phases,
+                        )?;
                         (reply, false)
                     }
                     other => crate::dispatch(component, &mut exchange, other),
@@ -180,17 +187,17 @@ struct Batch<'a> {
 
 impl Batch<'_> {
     /// Run the phases in order, each once its input is there, for `steps` consecutive steps
-    /// from `first`; wake the node that waits for a phase's output. Returns the reply. If a
-    /// request other than a batch comes while a phase waits for its input, the coordinator
-    /// has given up on this step (e.g. the other node failed): the batch ends there with an
-    /// error, the batches queued behind it are answered with an error unserved, and that
-    /// request is left in the queue.
+    /// from `first`, reporting in full at the steps `full_reports` names; wake the node that
+    /// waits for a phase's output. Returns the reply. If a request other than a batch comes
+    /// while a phase waits for its input, the coordinator has given up on this step (e.g. the
+    /// other node failed): the batch ends there with an error, the batches queued behind it
+    /// are answered with an error unserved, and that request is left in the queue.
     fn run(
         &mut self,
         component: &mut dyn Component,
         exchange: &mut IpcExchange,
-        first: u64,
-        steps: u64,
+        (first, steps): (u64, u64),
+        full_reports: FullReports,
         phases: &[PhaseOrder],
     ) -> Result<Reply, IpcError> {
         let steps = steps.max(1);
@@ -226,8 +233,13 @@ impl Batch<'_> {
                 }
             }
             let start = std::time::Instant::now();
-            let (reply, _) =
-                crate::dispatch(component, exchange, Command::RunPhase { step, phase });
+            let detail = full_reports.detail(step);
+            let command = Command::RunPhase {
+                step,
+                phase,
+                detail,
+            };
+            let (reply, _) = crate::dispatch(component, exchange, command);
             let failed = |message| Ok(Reply::PhasesFailed { step, message });
             let report = match reply {
                 Reply::PhaseDone(r) => r,

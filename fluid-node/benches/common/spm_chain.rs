@@ -2,7 +2,8 @@
 //! momentum exchange and penalty of a step, and the criterion group settings (per-cell
 //! throughput). Running on a pool thread is in `pool_thread.rs`.
 use cosim::{
-    BeadImpulse, BeadState, Component, Exchange, InProcessExchange, Phase, PhaseReport, Port,
+    BeadImpulse, BeadState, Component, Detail, Exchange, InProcessExchange, Phase, PhaseReport,
+    Port,
 };
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion, Throughput};
@@ -72,7 +73,7 @@ pub fn spm_scene_head(dims: usize, grid: [usize; 3]) -> String {
 
 /// The SPM half of step `n` once the bead states at n+1 are known (L2020 eqs. 35-38): states
 /// published, momentum exchange, impulses read back into `imp`, states published again,
-/// penalty. The penalty's report.
+/// penalty. The penalty's report, brief ([`Detail::Brief`]) as at the steps a run does not log.
 pub fn exchange_and_penalty(
     comp: &mut FluidComponent,
     x: &mut InProcessExchange,
@@ -82,8 +83,10 @@ pub fn exchange_and_penalty(
 ) -> PhaseReport {
     x.publish_states(Port::BeadPositions, n + 1, states)
         .unwrap();
-    comp.run_phase(n, Phase::FluidMomentumExchange, x).unwrap();
+    comp.run_phase_with(n, Phase::FluidMomentumExchange, Detail::Brief, x)
+        .unwrap();
     x.read_impulses(Port::BeadImpulses, imp).unwrap();
     x.publish_states(Port::BeadStates, n + 1, states).unwrap();
-    comp.run_phase(n, Phase::FluidPenalty, x).unwrap()
+    comp.run_phase_with(n, Phase::FluidPenalty, Detail::Brief, x)
+        .unwrap()
 }

@@ -14,48 +14,14 @@
 //! - `pressure_jump_mu`: `μ (ψ_in - ψ_out)`, the same jump at equilibrium from the uniform
 //!   chemical potential alone (module docs of `cahn_hilliard::pressure`).
 //!
-//! The whole-field passes cost about two phase-field steps, so they run only at the steps
-//! the coordinator logs ([`Reporting`]).
+//! The whole-field passes cost about two phase-field steps, so they run only in full reports
+//! ([`cosim::Detail`]), which the coordinator asks for at the steps it logs.
 use crate::cahn_hilliard::{CahnHilliard, Fluid};
 use crate::grid::Grid;
 use std::f64::consts::{PI, SQRT_2, TAU};
 
-/// Droplet diagnostics, in their fixed order, at reporting steps.
+/// Droplet diagnostics, in their fixed order, in full reports.
 pub const DROPLET_DIAGNOSTICS: [&str; 3] = ["droplet_radius", "pressure_jump", "pressure_jump_mu"];
-
-/// The steps after which the coordinator logs diagnostics: every `output.interval` and the
-/// last of `time.steps` (the rule of the coordinator's `LoadedScene::output_interval`:
-/// default interval `steps / 200`, at least 1). A run stopped early (Ctrl-C, at rest) has
-/// no droplet diagnostics at its last step unless it falls on the interval.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct Reporting {
-    pub steps: Option<u64>,
-    pub interval: Option<u64>,
-}
-
-impl Reporting {
-    /// From the scene's `time.steps` and `output.interval` (the coordinator checked them).
-    pub fn from_scene(table: &toml::Table) -> Self {
-        let int = |t: &str, k: &str| {
-            table
-                .get(t)
-                .and_then(|v| v.get(k))
-                .and_then(|v| v.as_integer())
-                .and_then(|v| u64::try_from(v).ok())
-        };
-        let steps = int("time", "steps");
-        let interval = int("output", "interval")
-            .or(steps.map(|s| s / 200))
-            .map(|i| i.max(1));
-        Self { steps, interval }
-    }
-
-    /// Whether the diagnostics of step `step` (n -> n+1) are logged.
-    pub fn due(&self, step: u64) -> bool {
-        let n = step + 1;
-        self.steps == Some(n) || self.interval.is_some_and(|i| n.is_multiple_of(i))
-    }
-}
 
 /// What [`measure`] finds.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,7 +35,7 @@ pub struct Droplet {
     pub pressure_jump_mu: f64,
 }
 
-/// Scratch of the droplet diagnostics, allocated at the first reporting step.
+/// Scratch of the droplet diagnostics, allocated at the first full report.
 pub struct Scratch {
     pressure: Vec<f64>,
     mu: Vec<f64>,
