@@ -47,7 +47,8 @@ fn bench_case(c: &mut Criterion, name: &str, dims: usize, grid: [usize; 3], bead
                 let pf = comp
                     .run_phase_with(n, Phase::FluidPhaseField, Detail::Brief, &mut x)
                     .unwrap();
-                let r = exchange_and_penalty(&mut comp, &mut x, n, &at_n1, &mut imp);
+                let r =
+                    exchange_and_penalty(&mut comp, &mut x, (n, Detail::Brief), &at_n1, &mut imp);
                 n += 1;
                 std::hint::black_box((pf, r))
             })

@@ -73,11 +73,11 @@ pub fn spm_scene_head(dims: usize, grid: [usize; 3]) -> String {
 
 /// The SPM half of step `n` once the bead states at n+1 are known (L2020 eqs. 35-38): states
 /// published, momentum exchange, impulses read back into `imp`, states published again,
-/// penalty. The penalty's report, brief ([`Detail::Brief`]) as at the steps a run does not log.
+/// penalty. The penalty's report, with `detail`: brief at the steps a run does not log.
 pub fn exchange_and_penalty(
     comp: &mut FluidComponent,
     x: &mut InProcessExchange,
-    n: u64,
+    (n, detail): (u64, Detail),
     states: &[BeadState],
     imp: &mut Vec<BeadImpulse>,
 ) -> PhaseReport {
@@ -87,6 +87,6 @@ pub fn exchange_and_penalty(
         .unwrap();
     x.read_impulses(Port::BeadImpulses, imp).unwrap();
     x.publish_states(Port::BeadStates, n + 1, states).unwrap();
-    comp.run_phase_with(n, Phase::FluidPenalty, Detail::Brief, x)
+    comp.run_phase_with(n, Phase::FluidPenalty, detail, x)
         .unwrap()
 }
