@@ -374,13 +374,7 @@ impl CahnHilliard {
         let g = self.grid;
         let psi = &self.psi;
         per_row(&mut self.partials, g.rows(), g.nx, |r| {
-            psi[r * g.nx..(r + 1) * g.nx].iter().fold(0.0f64, |m, v| {
-                if v.is_nan() || m.is_nan() {
-                    f64::NAN
-                } else {
-                    m.max(v.abs())
-                }
-            })
+            crate::parallel::max_abs(&psi[r * g.nx..(r + 1) * g.nx])
         });
         self.partials.iter().fold(0.0f64, |a, &b| {
             if a.is_nan() || b.is_nan() {

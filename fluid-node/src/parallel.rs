@@ -93,3 +93,48 @@ pub fn per_row<T: Send>(
 pub fn ordered_sum(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |a, b| a + b)
 }
+
+/// Largest |v| (0 for none), NaN if any value is NaN. Eight lanes and a NaN flag instead of a
+/// branch per value: the maximum does not depend on the order, and a single running maximum
+/// waits on every comparison in turn.
+pub fn max_abs(v: &[f64]) -> f64 {
+    const LANES: usize = 8;
+    let mut m = [0.0f64; LANES];
+    let mut nan = false;
+    let mut chunks = v.chunks_exact(LANES);
+    for c in &mut chunks {
+        for l in 0..LANES {
+            m[l] = m[l].max(c[l].abs());
+            nan |= c[l].is_nan();
+        }
+    }
+    for (l, x) in chunks.remainder().iter().enumerate() {
+        m[l] = m[l].max(x.abs());
+        nan |= x.is_nan();
+    }
+    if nan {
+        f64::NAN
+    } else {
+        m.iter().fold(0.0f64, |a, &b| a.max(b))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lanes give the plain maximum for every remainder, and NaN wherever it sits.
+    #[test]
+    fn max_abs_is_the_plain_maximum_and_sees_nan() {
+        for n in 0..12 {
+            let v: Vec<f64> = (0..n).map(|i| ((i * 37 % 11) as f64 - 5.3) * 0.7).collect();
+            let plain = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            assert_eq!(max_abs(&v), plain, "{n} values");
+            for k in 0..n {
+                let mut w = v.clone();
+                w[k] = f64::NAN;
+                assert!(max_abs(&w).is_nan(), "NaN at {k} of {n}");
+            }
+        }
+    }
+}
