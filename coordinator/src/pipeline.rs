@@ -199,11 +199,17 @@ impl Batches {
             link.send(&self.batch(*o, (step, count), full))
                 .map_err(|e| failed(link.name(), e))?;
         }
+        // A node that cannot take the next step's batch may have failed in this step already
+        // (it got this step's batch a moment ago): its reply or its silence below says so,
+        // with this step's number. Only if this step completes is it the next step's failure.
+        let mut next_refused = None;
         if send_next && count == 1 && !self.early.is_empty() {
             for &o in &self.early {
                 let link = &mut nodes[o].link;
-                link.send(&self.batch(o, (step + 1, 1), full))
-                    .map_err(|e| at_first(node_failed(link.name(), step + 1, "", e)))?;
+                if let Err(e) = link.send(&self.batch(o, (step + 1, 1), full)) {
+                    next_refused = Some(node_failed(link.name(), step + 1, "", e));
+                    break;
+                }
             }
             self.sent_early = Some(step + 1);
         }
@@ -306,7 +312,10 @@ impl Batches {
             }
             all.push(reports);
         }
-        Ok(all)
+        match next_refused {
+            Some(e) => Err((e, step + 1)),
+            None => Ok(all),
+        }
     }
 }
 
