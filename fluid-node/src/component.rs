@@ -357,25 +357,22 @@ impl Run {
             )));
         }
         let full = detail == Detail::Full;
-        let div = if full { self.ns.max_divergence() } else { 0.0 };
+        let div = full.then(|| self.ns.max_divergence());
         let mean = self.ns.mean_velocity();
-        let mut values = vec![ke, vmax, cfl, div, mean[0], mean[1], mean[2]];
-        let mut names: Vec<&str> = DIAGNOSTICS.to_vec();
-        if !full {
-            values.remove(3);
-            names.remove(3);
-        }
+        let values = [ke, vmax, cfl].map(Some).into_iter().chain([div]);
+        let values = values.chain(mean.map(Some));
+        let mut diagnostics: Vec<(String, f64)> = DIAGNOSTICS
+            .iter()
+            .zip(values)
+            .filter_map(|(n, v)| v.map(|v| (n.to_string(), v)))
+            .collect();
         if let (Some(w), true) = (self.spm.walls(), full) {
             self.ns.plane_average(0, &mut self.profile);
-            values.push(w.couette_error(&self.profile));
-            names.push(COUETTE_DIAGNOSTIC);
+            let error = w.couette_error(&self.profile);
+            diagnostics.push((COUETTE_DIAGNOSTIC.to_string(), error));
         }
         Ok(PhaseReport {
-            diagnostics: names
-                .iter()
-                .zip(values)
-                .map(|(n, v)| (n.to_string(), v))
-                .collect(),
+            diagnostics,
             detail,
         })
     }
