@@ -158,12 +158,13 @@ impl Batches {
     }
 
     /// Run `count` steps from `step`: send every node its batch (unless it went out with the
-    /// step before), reporting in full where `full` says, collect the replies. With `send_next` (one step only), the nodes that
-    /// can start the next step alone get its batch now too; the caller must then run that
-    /// step. Returns the phases' reports in schedule order, step by step, adds each phase's
-    /// time inside its node to `seconds` and the time it waited there for its input to
-    /// `waiting`. `timeout` is per step. An error comes with the number of steps known to be
-    /// done: the step a node failed at, or the batch's first step if that is all it is known.
+    /// step before), reporting in full where `full` says, collect the replies. With
+    /// `send_next` (one step only), the nodes that can start the next step alone get its
+    /// batch now too; the caller must then run that step. Returns the phases' reports in
+    /// schedule order, step by step, adds each phase's time inside its node to `seconds` and
+    /// the time it waited there for its input to `waiting`. `timeout` is per step. An error
+    /// comes with the number of steps known to be done: the step a node failed at, or the
+    /// batch's first step if that is all it is known.
     pub(crate) fn run_steps(
         &mut self,
         (step, count, full): (u64, u64, FullReports),

@@ -233,9 +233,6 @@ impl CahnHilliard {
     fn residual(&mut self) -> f64 {
         let e0 = self.cfg.e0;
         self.chemical_potential();
-        self.mu.iter().fold(
-            0.0f64,
-            |m, v| if v.is_nan() { f64::NAN } else { m.max(v.abs()) },
-        ) / e0
+        crate::parallel::max_abs(&self.mu) / e0
     }
 }
