@@ -249,7 +249,7 @@ impl FluidComponent {
                     // Eqs. 37-38.
                     let (spm, states) = (&run.spm, &run.states);
                     run.ns
-                        .add_projected(|c, u_c, out| spm.penalty(c, u_c, states, out));
+                        .add_projected(|c, r, u_c, out| spm.penalty_row((c, r), u_c, states, out));
                 }
                 run.pending = None;
                 run.report(step, detail)

@@ -23,7 +23,7 @@
 //! of `û` (a deterministic function of it), so saving `û` saves everything.
 use crate::grid::{Grid, Wavenumbers};
 use crate::parallel::{for_each_row, grain, ordered_sum, per_row};
-use crate::transform::Transform;
+use crate::transform::{Modes, Transform};
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
@@ -42,8 +42,11 @@ pub struct SpectralNs {
     u: Vec<Vec<f64>>,
     /// Spectral velocity components (the state).
     u_hat: Vec<Vec<Complex64>>,
-    /// Advection term, then the transformed penalty force.
+    /// Advection term (3D) or the transformed products `u_a u_b` it is formed from (2D, in
+    /// the order of [`pair`]), then the transformed penalty force.
     nl_hat: Vec<Vec<Complex64>>,
+    /// Stored kx that the 2/3 rule keeps (a prefix).
+    kept_kx: usize,
     tmp_hat: Vec<Complex64>,
     scratch: Vec<f64>,
     partials: Vec<f64>,
@@ -71,6 +74,8 @@ impl SpectralNs {
                 .collect::<Vec<f64>>()
         });
         let d = grid.dims;
+        let kept_kx = waves.x.keep.iter().take_while(|&&k| k).count();
+        debug_assert!(waves.x.keep[kept_kx..].iter().all(|&k| !k));
         let mut body = body_accel;
         if d == 2 {
             body[2] = 0.0;
@@ -78,14 +83,17 @@ impl SpectralNs {
         Self {
             grid,
             waves,
-            transform: Transform::new(grid, 0),
+            // 2D: the two components' inverse transforms share their parallel passes (one
+            // more spectrum); in 3D a transform is long enough that a pass more costs nothing.
+            transform: Transform::with_batch(grid, 0, if d == 2 { 2 } else { 1 }),
             nu,
             dt,
             body_accel: body,
             decay,
             u: vec![vec![0.0; grid.cells()]; d],
             u_hat: vec![vec![Complex64::default(); grid.modes()]; d],
-            nl_hat: vec![vec![Complex64::default(); grid.modes()]; d],
+            nl_hat: vec![vec![Complex64::default(); grid.modes()]; if d == 2 { 3 } else { d }],
+            kept_kx,
             tmp_hat: vec![Complex64::default(); grid.modes()],
             scratch: vec![0.0; grid.cells()],
             partials: Vec::with_capacity(grid.rows()),
@@ -124,12 +132,21 @@ impl SpectralNs {
                     self.grid.cells()
                 ));
             }
-            self.transform.forward(fc, &mut self.force_hat[c]);
-            self.force_hat[c]
-                .par_iter_mut()
-                .with_min_len(grain())
-                .for_each(|v| *v *= inv_rho);
         }
+        let nx = self.grid.nx;
+        let mut specs = slices(&mut self.force_hat);
+        self.transform.forward_rows(
+            &mut specs[..d],
+            |c, r, out| out.copy_from_slice(&f[c][r * nx..(r + 1) * nx]),
+            Modes::All,
+        );
+        for_each_row(&mut specs[..d], self.grid.nxh(), |_, rows| {
+            for row in rows.iter_mut() {
+                for v in row.iter_mut() {
+                    *v *= inv_rho;
+                }
+            }
+        });
         Ok(())
     }
 
@@ -188,9 +205,13 @@ impl SpectralNs {
 
     /// Real field := inverse transform of the spectral state.
     fn sync_real(&mut self) {
-        for c in 0..self.grid.dims {
-            self.transform.inverse(&self.u_hat[c], &mut self.u[c]);
-        }
+        let d = self.grid.dims;
+        let specs: [&[Complex64]; 3] = std::array::from_fn(|c| match self.u_hat.get(c) {
+            Some(h) => &h[..],
+            None => &[],
+        });
+        let mut reals = slices(&mut self.u);
+        self.transform.inverse_many(&specs[..d], &mut reals[..d]);
     }
 
     fn project_state(&mut self) {
@@ -214,10 +235,35 @@ impl SpectralNs {
         });
     }
 
-    /// Advection term `N̂ = -i k_b (u_a u_b)^` per component, into `nl_hat`.
+    /// The transformed products `P̂_ab = (u_a u_b)^` the advection term `N̂_a = -i k_b P̂_ab`
+    /// is formed from, each finished only on the modes the 2/3 rule keeps ([`Modes::Band`]).
+    /// 2D: the three products go to `nl_hat` in one batch, and [`Self::advance_intermediate`]
+    /// forms `N̂` from them. 3D: one product at a time (no room for six spectra at the grid
+    /// sizes 3D runs at), each added to `N̂` in `nl_hat`.
     fn advection(&mut self) {
         let g = self.grid;
         let d = g.dims;
+        let nx = g.nx;
+        let band = Modes::Band {
+            kx: self.kept_kx,
+            ky: &self.waves.y.keep,
+        };
+        let u = &self.u;
+        if d == 2 {
+            let mut specs = slices(&mut self.nl_hat);
+            self.transform.forward_rows(
+                &mut specs,
+                |f, r, out| {
+                    let (a, b) = PAIRS_2D[f];
+                    let (ua, ub) = (&u[a][r * nx..(r + 1) * nx], &u[b][r * nx..(r + 1) * nx]);
+                    for ((o, x), y) in out.iter_mut().zip(ua).zip(ub) {
+                        *o = x * y;
+                    }
+                },
+                band,
+            );
+            return;
+        }
         for h in self.nl_hat.iter_mut() {
             h.par_iter_mut()
                 .with_min_len(grain())
@@ -225,15 +271,16 @@ impl SpectralNs {
         }
         for a in 0..d {
             for b in a..d {
-                {
-                    let (ua, ub) = (&self.u[a], &self.u[b]);
-                    self.scratch
-                        .par_iter_mut()
-                        .zip(ua.par_iter().zip(ub.par_iter()))
-                        .with_min_len(grain())
-                        .for_each(|(p, (x, y))| *p = x * y);
-                }
-                self.transform.forward(&self.scratch, &mut self.tmp_hat);
+                self.transform.forward_rows(
+                    &mut [&mut self.tmp_hat[..]],
+                    |_, r, out| {
+                        let (ua, ub) = (&u[a][r * nx..(r + 1) * nx], &u[b][r * nx..(r + 1) * nx]);
+                        for ((o, x), y) in out.iter_mut().zip(ua).zip(ub) {
+                            *o = x * y;
+                        }
+                    },
+                    band,
+                );
                 let w = &self.waves;
                 let p_hat = &self.tmp_hat;
                 let nxh = g.nxh();
@@ -260,12 +307,11 @@ impl SpectralNs {
                     let p_row = &p_hat[r * nxh..(r + 1) * nxh];
                     for ix in 0..nxh {
                         let p = p_row[ix];
-                        // N_a -= i k_b P; N_b -= i k_a P (a != b).
-                        let kb = axis_k(b, ix, iy, iz);
-                        rows[0][ix] += Complex64::new(kb * p.im, -kb * p.re);
+                        // N_a -= i k_b P; N_b -= i k_a P (a != b). Modes outside the band
+                        // get unfinished values, which the step never reads.
+                        rows[0][ix] += minus_i_k(axis_k(b, ix, iy, iz), p);
                         if rows.len() == 2 {
-                            let ka = axis_k(a, ix, iy, iz);
-                            rows[1][ix] += Complex64::new(ka * p.im, -ka * p.re);
+                            rows[1][ix] += minus_i_k(axis_k(a, ix, iy, iz), p);
                         }
                     }
                 });
@@ -301,7 +347,17 @@ impl SpectralNs {
                 for c in 0..d {
                     let mut s = rows[c][ix];
                     if keep {
-                        s += nl[c][r * nxh + ix] * dt;
+                        let i = r * nxh + ix;
+                        let n = if d == 2 {
+                            // N̂_c = -i k_x P̂_cx - i k_y P̂_cy, summed as the 3D path does.
+                            let mut n = Complex64::default();
+                            n += minus_i_k(k[0], nl[PAIR_2D[c][0]][i]);
+                            n += minus_i_k(k[1], nl[PAIR_2D[c][1]][i]);
+                            n
+                        } else {
+                            nl[c][i]
+                        };
+                        s += n * dt;
                     }
                     if r == 0 && ix == 0 {
                         s.re += mean_kick[c];
@@ -324,15 +380,20 @@ impl SpectralNs {
     /// the penalty `φ (u_p - u*)` and the pressure p** that keeps u divergence-free); the
     /// real field is updated.
     ///
-    /// `force(c, u_c, out)` writes component `c` of the force into `out` (every element),
-    /// given the real velocity component `u_c`.
-    pub fn add_projected(&mut self, mut force: impl FnMut(usize, &[f64], &mut [f64])) {
+    /// `force(c, r, u_c, out)` writes row `r` of component `c` of the force into `out` (every
+    /// element), given row `r` of the real velocity component `u_c`. Rows are formed as the
+    /// transform takes them, all components in one batch, so `f` is never stored.
+    pub fn add_projected(&mut self, force: impl Fn(usize, usize, &[f64], &mut [f64]) + Sync) {
         let g = self.grid;
         let d = g.dims;
-        for c in 0..d {
-            force(c, &self.u[c], &mut self.scratch);
-            self.transform.forward(&self.scratch, &mut self.nl_hat[c]);
-        }
+        let nx = g.nx;
+        let u = &self.u;
+        let mut specs = slices(&mut self.nl_hat);
+        self.transform.forward_rows(
+            &mut specs[..d],
+            |c, r, out| force(c, r, &u[c][r * nx..(r + 1) * nx], out),
+            Modes::All,
+        );
         let w = &self.waves;
         let f_hat = &self.nl_hat;
         let nxh = g.nxh();
@@ -479,6 +540,17 @@ fn row_energy_and_max<const D: usize>(c: [&[f64]; D]) -> (f64, f64) {
 
 /// Interleaved partial sums per row in [`row_energy_and_max`].
 const LANES: usize = 4;
+
+/// The 2D products in the order [`SpectralNs::advection`] transforms them: (a, b) per index.
+const PAIRS_2D: [(usize, usize); 3] = [(0, 0), (0, 1), (1, 1)];
+/// Index in [`PAIRS_2D`] of the product of components c and e, per c, e.
+const PAIR_2D: [[usize; 2]; 2] = [[0, 1], [1, 2]];
+
+/// `-i k p`.
+#[inline]
+fn minus_i_k(k: f64, p: Complex64) -> Complex64 {
+    Complex64::new(k * p.im, -k * p.re)
+}
 
 /// Remove the component of `v` along `k` (first `d` components): `v -= k (k·v) / k²`.
 #[inline]

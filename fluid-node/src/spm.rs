@@ -12,7 +12,7 @@
 //! exchange, n+1 in the penalty). In 2D only x, y of X and V and the z component of Omega
 //! are used; the angular impulse is along z.
 use crate::grid::Grid;
-use crate::parallel::{grain, min_len};
+use crate::parallel::min_len;
 use crate::smoothed_profile::BeadProfile;
 use crate::walls::Walls;
 use cosim::{BeadImpulse, BeadState};
@@ -211,41 +211,34 @@ impl Spm {
             });
     }
 
-    /// Component `c` of the penalty of eq. 38, phi (u_p - u*) = Σ_i phi_i (u_i - u*) plus the
-    /// walls' phi_w (u_w - u*), each phi normalised by max(1, phi), into `out` (every node
-    /// written). `u_c` is component c of u*; `states` carry the velocities at n+1.
-    pub fn penalty(&self, c: usize, u_c: &[f64], states: &[BeadState], out: &mut [f64]) {
+    /// Row `r` of component `c` of the penalty of eq. 38, phi (u_p - u*) = Σ_i phi_i (u_i -
+    /// u*) plus the walls' phi_w (u_w - u*), each phi normalised by max(1, phi), into `out`
+    /// (every element written). `u_c` is row `r` of component c of u*; `states` carry the
+    /// velocities at n+1. The walls' share comes first, then the beads' in bead order.
+    pub fn penalty_row(
+        &self,
+        (c, r): (usize, usize),
+        u_c: &[f64],
+        states: &[BeadState],
+        out: &mut [f64],
+    ) {
         let g = self.grid;
         let nx = g.nx;
-        let phi = &self.phi;
+        let phi = &self.phi[r * nx..(r + 1) * nx];
+        let pw = self.walls.as_ref().map_or(0.0, |w| w.phi(r % g.ny));
         match &self.walls {
-            Some(w) => out
-                .par_chunks_mut(nx)
-                .zip(u_c.par_chunks(nx))
-                .zip(phi.par_chunks(nx))
-                .with_min_len(min_len(g.rows(), nx))
-                .enumerate()
-                .for_each(|(r, ((o, u), p))| {
-                    let y = r % g.ny;
-                    let pw = w.phi(y);
-                    if pw > 0.0 {
-                        let uw = if c == 0 { w.speed(y) } else { 0.0 };
-                        for x in 0..nx {
-                            o[x] = pw / p[x].max(1.0) * (uw - u[x]);
-                        }
-                    } else {
-                        o.fill(0.0);
-                    }
-                }),
-            None => out
-                .par_iter_mut()
-                .with_min_len(grain())
-                .for_each(|v| *v = 0.0),
+            Some(w) if pw > 0.0 => {
+                let uw = if c == 0 { w.speed(r % g.ny) } else { 0.0 };
+                for x in 0..nx {
+                    out[x] = pw / phi[x].max(1.0) * (uw - u_c[x]);
+                }
+            }
+            _ => out.fill(0.0),
         }
         for (b, s) in self.beads.iter().zip(states) {
-            b.for_each(g, |i, r, p| {
-                let w = p / phi[i].max(1.0);
-                out[i] += w * (rigid_velocity(s, r, g.dims)[c] - u_c[i]);
+            b.for_each_in_row(g, r, |x, rr, p| {
+                let w = p / phi[x].max(1.0);
+                out[x] += w * (rigid_velocity(s, rr, g.dims)[c] - u_c[x]);
             });
         }
     }
@@ -303,7 +296,9 @@ mod tests {
         // Penalty with the whole solid at rest drives u to 0 where phi >= 1.
         let u = vec![1.0; g.cells()];
         let mut f = vec![0.0; g.cells()];
-        spm.penalty(0, &u, &states, &mut f);
+        for (r, (fr, ur)) in f.chunks_mut(g.nx).zip(u.chunks(g.nx)).enumerate() {
+            spm.penalty_row((0, r), ur, &states, fr);
+        }
         for i in 0..g.cells() {
             let after = u[i] + f[i];
             assert!((after - (1.0 - spm.phi()[i].min(1.0))).abs() < 1e-14);
