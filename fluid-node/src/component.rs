@@ -200,8 +200,13 @@ impl FluidComponent {
                     b.load_capillary_force(&run.spm, &mut run.ns, run.cfg.density)
                         .map_err(ComponentError)?;
                 }
-                // Eq. 34: u^n -> u*.
-                run.ns.advance_intermediate();
+                // Eq. 34: u^n -> u*. With solids the penalty rebuilds the whole real field,
+                // and until then u* is read only on the solids' rows.
+                if run.spm.has_solids() {
+                    run.ns.advance_intermediate_on(run.spm.solid_rows());
+                } else {
+                    run.ns.advance_intermediate();
+                }
                 let mut total = [0.0; 3];
                 if has_beads {
                     // Eqs. 35-36.

@@ -150,6 +150,13 @@ impl BeadProfile {
         }
     }
 
+    /// The grid rows (`z * ny + y`) the cut-off box covers (each once per wrap).
+    pub fn rows(&self, grid: Grid) -> impl Iterator<Item = usize> + '_ {
+        self.nodes[2]
+            .iter()
+            .flat_map(move |&z| self.nodes[1].iter().map(move |&y| z * grid.ny + y))
+    }
+
     /// Grid sum of phi_i (cell volume 1).
     pub fn grid_volume(&self) -> f64 {
         self.values.iter().sum()

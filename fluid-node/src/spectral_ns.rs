@@ -205,13 +205,19 @@ impl SpectralNs {
 
     /// Real field := inverse transform of the spectral state.
     fn sync_real(&mut self) {
+        self.sync_rows(&[]);
+    }
+
+    /// [`Self::sync_real`] on the rows flagged in `rows` only (empty: all).
+    fn sync_rows(&mut self, rows: &[bool]) {
         let d = self.grid.dims;
         let specs: [&[Complex64]; 3] = std::array::from_fn(|c| match self.u_hat.get(c) {
             Some(h) => &h[..],
             None => &[],
         });
         let mut reals = slices(&mut self.u);
-        self.transform.inverse_many(&specs[..d], &mut reals[..d]);
+        self.transform
+            .inverse_rows(&specs[..d], &mut reals[..d], rows);
     }
 
     fn project_state(&mut self) {
@@ -322,6 +328,15 @@ impl SpectralNs {
     /// uⁿ → u* (L2020 eq. 34 without capillarity): advection, body force, exact viscous
     /// decay, projection; the real field is updated to u*.
     pub fn advance_intermediate(&mut self) {
+        self.advance_intermediate_on(&[]);
+    }
+
+    /// [`Self::advance_intermediate`] that updates the real field only on the grid rows
+    /// flagged in `rows` (`z * ny + y`; empty: all). The other rows keep uⁿ until the next
+    /// [`Self::add_projected`] (or [`Self::advance_intermediate`]) rebuilds the whole real
+    /// field: for a step whose penalty follows and which reads u* only where there are
+    /// solids (the impulses and the penalty of L2020 eqs. 35-38).
+    pub fn advance_intermediate_on(&mut self, rows: &[bool]) {
         self.advection();
         let g = self.grid;
         let d = g.dims;
@@ -373,7 +388,7 @@ impl SpectralNs {
                 }
             }
         });
-        self.sync_real();
+        self.sync_rows(rows);
     }
 
     /// `û += P f̂` with `f` given component by component in real space (L2020 eqs. 37–38:
@@ -682,6 +697,61 @@ mod tests {
             assert!(err < 1e-10);
         }
         assert!(s.velocity(1).iter().all(|v| v.abs() < 1e-15));
+    }
+
+    /// u* updated on some rows only (the solids' rows of an SPM step) gives those rows the
+    /// full update's bits and leaves the others as they were; after the penalty the whole
+    /// field has the bits of the full path.
+    #[test]
+    fn rows_updated_before_the_penalty_end_in_the_full_bits() {
+        for g in [Grid::new(2, [24, 20, 1]), Grid::new(3, [10, 12, 9])] {
+            let start = || {
+                let mut s = SpectralNs::new(g, 0.1, 0.3, [0.0; 3]);
+                s.set_velocity(|x, y, z| {
+                    let h = |a: usize| ((a * 2654435761) % 1000) as f64 / 1000.0 - 0.3;
+                    [h(x + 3 * y + 7 * z), h(5 * x + y + z), h(x + y + 11 * z)]
+                });
+                s
+            };
+            let (mut full, mut part) = (start(), start());
+            let rows: Vec<bool> = (0..g.rows()).map(|r| r % 3 == 1).collect();
+            let before: Vec<Vec<f64>> = part.velocity_components().to_vec();
+            full.advance_intermediate();
+            part.advance_intermediate_on(&rows);
+            let nx = g.nx;
+            for c in 0..g.dims {
+                for (r, &on) in rows.iter().enumerate() {
+                    let row = |v: &[f64]| {
+                        v[r * nx..(r + 1) * nx]
+                            .iter()
+                            .map(|x| x.to_bits())
+                            .collect::<Vec<_>>()
+                    };
+                    let want = if on {
+                        row(full.velocity(c))
+                    } else {
+                        row(&before[c])
+                    };
+                    assert_eq!(row(part.velocity(c)), want, "{g:?} component {c} row {r}");
+                }
+            }
+            // A penalty that reads u* on the flagged rows only.
+            let force = |c: usize, r: usize, u: &[f64], out: &mut [f64]| {
+                if rows[r] {
+                    for (o, v) in out.iter_mut().zip(u) {
+                        *o = 0.2 * (c as f64 + 1.0) - v;
+                    }
+                } else {
+                    out.fill(0.0);
+                }
+            };
+            full.add_projected(force);
+            part.add_projected(force);
+            for c in 0..g.dims {
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(part.velocity(c)), bits(full.velocity(c)), "{g:?} {c}");
+            }
+        }
     }
 
     #[test]

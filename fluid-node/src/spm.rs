@@ -33,6 +33,9 @@ pub struct Spm {
     /// [`Spm::bead_volume`] at the placed positions: summed once per placement, since the
     /// momentum exchange reports it every step and it is on the path to the fibre node.
     bead_volume: f64,
+    /// Grid rows where a wall or a placed bead's cut-off box lies: the rows the momentum
+    /// exchange and the penalty read u* on.
+    solid_rows: Vec<bool>,
 }
 
 /// Rigid-body velocity V + Omega x r of a bead at offset r (2D: Omega_z only).
@@ -75,8 +78,10 @@ impl Spm {
             phi: vec![0.0; grid.cells()],
             placed_at: None,
             bead_volume: 0.0,
+            solid_rows: vec![false; grid.rows()],
         };
         s.reset_phi();
+        s.mark_solid_rows();
         s
     }
 
@@ -91,6 +96,27 @@ impl Spm {
     /// The beads' profiles (eq. 25) as last placed, in bead order.
     pub fn profiles(&self) -> &[BeadProfile] {
         &self.beads
+    }
+
+    /// Grid rows (`z * ny + y`) holding any solid: the walls' and the placed beads' cut-off
+    /// boxes (a superset of the rows where phi > 0). Off these rows [`Spm::impulses`] and
+    /// [`Spm::penalty_row`] do not read the velocity.
+    pub fn solid_rows(&self) -> &[bool] {
+        &self.solid_rows
+    }
+
+    fn mark_solid_rows(&mut self) {
+        let g = self.grid;
+        for (r, s) in self.solid_rows.iter_mut().enumerate() {
+            *s = self.walls.as_ref().is_some_and(|w| w.phi(r % g.ny) > 0.0);
+        }
+        if self.placed_at.is_some() {
+            for b in &self.beads {
+                for r in b.rows(g) {
+                    self.solid_rows[r] = true;
+                }
+            }
+        }
     }
 
     /// Total solid fraction (beads and walls, before normalisation) per node.
@@ -171,6 +197,7 @@ impl Spm {
         at.clear();
         at.extend(states.iter().map(|s| s.position));
         self.placed_at = Some(at);
+        self.mark_solid_rows();
         Ok(())
     }
 
@@ -277,6 +304,11 @@ mod tests {
         spm.place(&states).unwrap();
         let max = spm.phi().iter().fold(0.0f64, |m, &p| m.max(p));
         assert!(max > 1.5, "{max}");
+        // Every node with a solid lies on a row flagged as solid.
+        for (i, &p) in spm.phi().iter().enumerate() {
+            assert!(p == 0.0 || spm.solid_rows()[i / g.nx], "node {i}: phi {p}");
+        }
+        assert!(spm.solid_rows().iter().any(|&s| !s));
         // Normalised weights: the solid fraction Σ phi_k / max(1, phi) stays in [0, 1].
         let mut sum = vec![0.0; g.cells()];
         for y in 0..32 {

@@ -318,17 +318,30 @@ impl Transform {
     /// [`Transform::inverse`] of several fields, `specs[f]` into `reals[f]`, sharing one
     /// parallel pass per axis among as many fields as [`Transform::with_batch`] allows.
     pub fn inverse_many(&mut self, specs: &[&[Complex64]], reals: &mut [&mut [f64]]) {
+        self.inverse_rows(specs, reals, &[]);
+    }
+
+    /// [`Transform::inverse_many`] that writes only the rows `r` of the real fields with
+    /// `rows[r]` set (`rows` empty: all); the other rows are left as they were. The strided
+    /// passes are whole, so a written row is exactly what a full inverse gives.
+    pub fn inverse_rows(
+        &mut self,
+        specs: &[&[Complex64]],
+        reals: &mut [&mut [f64]],
+        rows: &[bool],
+    ) {
         let g = self.grid;
+        assert!(rows.is_empty() || rows.len() == g.rows());
         assert_eq!(specs.len(), reals.len());
         assert!(specs.iter().all(|s| s.len() == g.modes()));
         assert!(reals.iter().all(|r| r.len() == g.cells()));
         let batch = self.work.len();
         for (specs, reals) in specs.chunks(batch).zip(reals.chunks_mut(batch)) {
-            self.inverse_batch(specs, reals);
+            self.inverse_batch(specs, reals, rows);
         }
     }
 
-    fn inverse_batch(&mut self, specs: &[&[Complex64]], reals: &mut [&mut [f64]]) {
+    fn inverse_batch(&mut self, specs: &[&[Complex64]], reals: &mut [&mut [f64]], only: &[bool]) {
         let g = self.grid;
         let k = specs.len();
         let mut src = [SharedPtr(std::ptr::null_mut()); MAX_BATCH];
@@ -368,6 +381,9 @@ impl Transform {
             .for_each(|(t, ws)| {
                 for item in t * per..((t + 1) * per).min(items) {
                     let (f, r) = (item / rows, item % rows);
+                    if !only.get(r).copied().unwrap_or(true) {
+                        continue;
+                    }
                     // SAFETY: row r of work spectrum f and of real field f belong to this item
                     // only; the work spectra are self's, the fields distinct exclusive borrows.
                     let (srow, rrow) = unsafe {
