@@ -43,7 +43,7 @@
 //! in [`CahnHilliard::new`]; a step allocates nothing.
 use crate::grid::{Grid, Wavenumbers};
 use crate::parallel::{for_each_row, grain, per_row};
-use crate::transform::Transform;
+use crate::transform::{Modes, Transform};
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
@@ -69,6 +69,12 @@ pub use params::{
 /// Largest |ψ| a step accepts before reporting divergence (the physical range is about
 /// [-1.1, 1.1]).
 pub const DIVERGENCE_BOUND: f64 = 10.0;
+
+/// μ_φ = 3 e0 φ (ψ - ψ*)² at a node (see [`CahnHilliard::solid_chemical_potential`]).
+#[inline]
+fn mu_phi(e0: f64, psi: f64, phi: f64, ps: f64) -> f64 {
+    3.0 * e0 * phi * (psi - ps) * (psi - ps)
+}
 
 /// Bulk part of μ_ψ / e0: `g = ψ³ - ψ + 3 φ² (ψ - ψ*)` (L2020 eqs. 29–30).
 #[inline]
@@ -100,10 +106,14 @@ pub struct CahnHilliard {
     mu_phi: Vec<f64>,
     work: Vec<f64>,
     g_hat: Vec<Complex64>,
+    /// The advection term; in 2D the transformed flux `(u_y ψ)^` it is formed from (with
+    /// `(u_x ψ)^` in `tmp_hat`).
     adv_hat: Vec<Complex64>,
     tmp_hat: Vec<Complex64>,
     partials: Vec<f64>,
     steps: u64,
+    /// Stored kx that the 2/3 rule keeps (a prefix).
+    kept_kx: usize,
 }
 
 /// `i k p`.
@@ -133,11 +143,14 @@ impl CahnHilliard {
         }
         cfg.validate()?;
         let (n, m) = (grid.cells(), grid.modes());
+        let waves = Wavenumbers::new(grid);
+        let kept_kx = waves.x.keep.iter().take_while(|&&k| k).count();
         let mut s = Self {
             grid,
             cfg,
-            waves: Wavenumbers::new(grid),
-            transform: Transform::new(grid, 0),
+            waves,
+            // 2D: the force's two components share their inverse transforms' passes.
+            transform: Transform::with_batch(grid, 0, if grid.dims == 2 { 2 } else { 1 }),
             psi: vec![-1.0; n],
             psi_hat: vec![Complex64::default(); m],
             phi: vec![0.0; n],
@@ -150,6 +163,7 @@ impl CahnHilliard {
             tmp_hat: vec![Complex64::default(); m],
             partials: Vec::with_capacity(grid.rows()),
             steps: 0,
+            kept_kx,
         };
         s.transform.forward(&s.psi, &mut s.psi_hat);
         Ok(s)
@@ -254,33 +268,60 @@ impl CahnHilliard {
         }
     }
 
-    /// `work := g(ψ, φ, ψ*)` and `g_hat := its transform`.
+    /// `g_hat := ĝ`, g = g(ψ, φ, ψ*) formed row by row as the transform takes it.
     fn bulk_transform(&mut self) {
+        let nx = self.grid.nx;
         let (psi, phi, ps) = (&self.psi, &self.phi, &self.psi_star);
-        self.work
-            .par_iter_mut()
-            .zip(psi.par_iter().zip(phi.par_iter().zip(ps.par_iter())))
-            .with_min_len(grain())
-            .for_each(|(w, (&p, (&f, &s)))| *w = bulk_derivative(p, f, s));
-        self.transform.forward(&self.work, &mut self.g_hat);
+        self.transform.forward_rows(
+            &mut [&mut self.g_hat[..]],
+            |_, r, out| {
+                let row = r * nx..(r + 1) * nx;
+                let (p, f, s) = (&psi[row.clone()], &phi[row.clone()], &ps[row]);
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = bulk_derivative(p[i], f[i], s[i]);
+                }
+            },
+            Modes::All,
+        );
     }
 
-    /// `adv_hat := -(∇·(u ψ))^`, dealiased by the 2/3 rule.
+    /// The transformed fluxes `(u_c ψ)^`, finished only on the modes the 2/3 rule keeps.
+    /// 2D: both go to `tmp_hat` and `adv_hat` in one batch, and the step forms
+    /// `-(∇·(u ψ))^` from them. 3D: one flux at a time, `adv_hat := -(∇·(u ψ))^` (dealiased).
     fn advection<V: AsRef<[f64]>>(&mut self, velocity: &[V]) {
         let g = self.grid;
-        let nxh = g.nxh();
+        let (nx, nxh) = (g.nx, g.nxh());
+        let band = Modes::Band {
+            kx: self.kept_kx,
+            ky: &self.waves.y.keep,
+        };
+        let psi = &self.psi;
+        let flux = |u: &[f64], r: usize, out: &mut [f64]| {
+            let row = r * nx..(r + 1) * nx;
+            for ((o, a), b) in out.iter_mut().zip(&u[row.clone()]).zip(&psi[row]) {
+                *o = a * b;
+            }
+        };
+        if g.dims == 2 {
+            let u = [velocity[0].as_ref(), velocity[1].as_ref()];
+            self.transform.forward_rows(
+                &mut [&mut self.tmp_hat[..], &mut self.adv_hat[..]],
+                |c, r, out| flux(u[c], r, out),
+                band,
+            );
+            return;
+        }
         self.adv_hat
             .par_iter_mut()
             .with_min_len(grain())
             .for_each(|v| *v = Complex64::default());
         for (c, u) in velocity.iter().enumerate().take(g.dims) {
             let u = u.as_ref();
-            self.work
-                .par_iter_mut()
-                .zip(u.par_iter().zip(self.psi.par_iter()))
-                .with_min_len(grain())
-                .for_each(|(w, (a, b))| *w = a * b);
-            self.transform.forward(&self.work, &mut self.tmp_hat);
+            self.transform.forward_rows(
+                &mut [&mut self.tmp_hat[..]],
+                |_, r, out| flux(u, r, out),
+                band,
+            );
             let w = &self.waves;
             let flux = &self.tmp_hat;
             let mut fields = [&mut self.adv_hat[..]];
@@ -336,11 +377,13 @@ impl CahnHilliard {
         let (dt, d0) = (self.cfg.dt, self.cfg.diffusivity());
         let (xi2, s) = (self.cfg.xi * self.cfg.xi, self.cfg.stabilisation);
         let explicit = self.cfg.scheme == Scheme::Explicit;
-        let (gh, adv) = (&self.g_hat, &self.adv_hat);
+        let (gh, adv, flux_x) = (&self.g_hat, &self.adv_hat, &self.tmp_hat);
+        let two_d = g.dims == 2;
         let mut fields = [&mut self.psi_hat[..]];
         for_each_row(&mut fields, nxh, |r, rows| {
             let (iy, iz) = g.row_yz(r);
             let k2yz = w.y.k2[iy] + w.z.k2[iz];
+            let keep_y = w.y.keep[iy];
             for (ix, v) in rows[0].iter_mut().enumerate() {
                 let i = r * nxh + ix;
                 let k2 = w.x.k2[ix] + k2yz;
@@ -348,7 +391,18 @@ impl CahnHilliard {
                 let p = *v;
                 let mut num = p;
                 if advect {
-                    num += adv[i] * dt;
+                    let adv_i = if !two_d {
+                        adv[i]
+                    } else if keep_y && w.x.keep[ix] {
+                        // -(i k_x F̂_x) - (i k_y F̂_y), as the 3D path sums it.
+                        let mut s = Complex64::default();
+                        s -= times_ik(w.x.k[ix], flux_x[i]);
+                        s -= times_ik(w.y.k[iy], adv[i]);
+                        s
+                    } else {
+                        Complex64::default()
+                    };
+                    num += adv_i * dt;
                 }
                 *v = if explicit {
                     num - (gh[i] + p * (xi2 * k2)) * a
@@ -426,7 +480,7 @@ impl CahnHilliard {
             .par_iter_mut()
             .zip(psi.par_iter().zip(phi.par_iter().zip(ps.par_iter())))
             .with_min_len(grain())
-            .for_each(|(m, (&p, (&f, &s)))| *m = 3.0 * e0 * f * (p - s) * (p - s));
+            .for_each(|(m, (&p, (&f, &s)))| *m = mu_phi(e0, p, f, s));
     }
 
     /// `work := ∂_c` of `psi_hat` (`of_psi`) or of `tmp_hat`, by a spectral derivative
@@ -448,23 +502,50 @@ impl CahnHilliard {
     }
 
     /// With `h` the spectral field in `tmp_hat`: `out[c] := -ψ ∂_c h`, or with `use_phi`
-    /// `out[c] -= φ ∂_c h` (spectral derivatives).
+    /// `out[c] -= φ ∂_c h` (spectral derivatives). The products are formed row by row as the
+    /// inverse transforms finish them; in 2D both components share one batch (the
+    /// derivatives' spectra in `g_hat` and `adv_hat`).
     fn gradient_product(&mut self, out: &mut [&mut [f64]], use_phi: bool) {
         let g = self.grid;
-        for (c, o) in out.iter_mut().enumerate().take(g.dims) {
-            self.derivative_into_work(c, false);
-            let weight = if use_phi { &self.phi } else { &self.psi };
-            let work = &self.work;
-            o.par_iter_mut()
-                .zip(weight.par_iter().zip(work.par_iter()))
-                .with_min_len(grain())
-                .for_each(|(f, (a, d))| {
-                    if use_phi {
-                        *f -= a * d;
-                    } else {
-                        *f = -a * d;
-                    }
-                });
+        let (nx, nxh) = (g.nx, g.nxh());
+        let weight = if use_phi { &self.phi } else { &self.psi };
+        let combine = |_: usize, r: usize, dh: &[f64], o: &mut [f64]| {
+            let a = &weight[r * nx..(r + 1) * nx];
+            for i in 0..nx {
+                if use_phi {
+                    o[i] -= a[i] * dh[i];
+                } else {
+                    o[i] = -a[i] * dh[i];
+                }
+            }
+        };
+        let w = &self.waves;
+        let src = &self.tmp_hat;
+        if g.dims == 2 {
+            let mut fields = [&mut self.g_hat[..], &mut self.adv_hat[..]];
+            for_each_row(&mut fields, nxh, |r, rows| {
+                let (iy, _) = g.row_yz(r);
+                for ix in 0..nxh {
+                    let h = src[r * nxh + ix];
+                    rows[0][ix] = times_ik(w.x.k[ix], h);
+                    rows[1][ix] = times_ik(w.y.k[iy], h);
+                }
+            });
+            self.transform
+                .inverse_combine(&[&self.g_hat, &self.adv_hat], &mut out[..2], combine);
+            return;
+        }
+        for c in 0..g.dims {
+            let mut fields = [&mut self.g_hat[..]];
+            for_each_row(&mut fields, nxh, |r, rows| {
+                let (iy, iz) = g.row_yz(r);
+                for ix in 0..nxh {
+                    let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]][c];
+                    rows[0][ix] = times_ik(k, src[r * nxh + ix]);
+                }
+            });
+            self.transform
+                .inverse_combine(&[&self.g_hat], &mut out[c..c + 1], combine);
         }
     }
 
@@ -492,8 +573,21 @@ impl CahnHilliard {
         self.mu_spectrum();
         self.gradient_product(&mut comps[..d], false);
         if self.phi.par_iter().any(|&p| p != 0.0) {
-            self.fill_mu_phi();
-            self.transform.forward(&self.mu_phi, &mut self.tmp_hat);
+            // μ_φ formed row by row; it vanishes off the solids, and those rows are skipped.
+            let nx = self.grid.nx;
+            let e0 = self.cfg.e0;
+            let (psi, phi, ps) = (&self.psi, &self.phi, &self.psi_star);
+            self.transform.forward_rows(
+                &mut [&mut self.tmp_hat[..]],
+                |_, r, out| {
+                    let row = r * nx..(r + 1) * nx;
+                    let (p, f, s) = (&psi[row.clone()], &phi[row.clone()], &ps[row]);
+                    for (i, o) in out.iter_mut().enumerate() {
+                        *o = mu_phi(e0, p[i], f[i], s[i]);
+                    }
+                },
+                Modes::All,
+            );
             self.gradient_product(&mut comps[..d], true);
         }
         Ok(())

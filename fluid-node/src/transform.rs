@@ -337,11 +337,45 @@ impl Transform {
         assert!(reals.iter().all(|r| r.len() == g.cells()));
         let batch = self.work.len();
         for (specs, reals) in specs.chunks(batch).zip(reals.chunks_mut(batch)) {
-            self.inverse_batch(specs, reals, rows);
+            self.inverse_batch(
+                specs,
+                reals,
+                rows,
+                None::<&fn(usize, usize, &[f64], &mut [f64])>,
+            );
         }
     }
 
-    fn inverse_batch(&mut self, specs: &[&[Complex64]], reals: &mut [&mut [f64]], only: &[bool]) {
+    /// Inverse transforms of `specs[f]` whose real rows are not stored but handed over as
+    /// they are finished: `combine(f, r, row, out)` with `row` row `r` of field f's inverse
+    /// and `out` row `r` of `outs[f]` (e.g. `out = -ψ row`, a product formed without a
+    /// stored field). Batched as [`Transform::inverse_many`].
+    pub fn inverse_combine(
+        &mut self,
+        specs: &[&[Complex64]],
+        outs: &mut [&mut [f64]],
+        combine: impl Fn(usize, usize, &[f64], &mut [f64]) + Sync,
+    ) {
+        let g = self.grid;
+        assert_eq!(specs.len(), outs.len());
+        assert!(specs.iter().all(|s| s.len() == g.modes()));
+        assert!(outs.iter().all(|r| r.len() == g.cells()));
+        let batch = self.work.len();
+        for (i, (specs, outs)) in specs.chunks(batch).zip(outs.chunks_mut(batch)).enumerate() {
+            let shifted = |f: usize, r: usize, row: &[f64], out: &mut [f64]| {
+                combine(i * batch + f, r, row, out)
+            };
+            self.inverse_batch(specs, outs, &[], Some(&shifted));
+        }
+    }
+
+    fn inverse_batch<C: Fn(usize, usize, &[f64], &mut [f64]) + Sync>(
+        &mut self,
+        specs: &[&[Complex64]],
+        reals: &mut [&mut [f64]],
+        only: &[bool],
+        combine: Option<&C>,
+    ) {
         let g = self.grid;
         let k = specs.len();
         let mut src = [SharedPtr(std::ptr::null_mut()); MAX_BATCH];
@@ -396,9 +430,21 @@ impl Transform {
                     if even {
                         srow[nxh - 1].im = 0.0;
                     }
-                    let _ = c2r.process_with_scratch(srow, rrow, &mut ws.fft_scratch);
-                    for v in rrow.iter_mut() {
-                        *v *= scale;
+                    match combine {
+                        None => {
+                            let _ = c2r.process_with_scratch(srow, rrow, &mut ws.fft_scratch);
+                            for v in rrow.iter_mut() {
+                                *v *= scale;
+                            }
+                        }
+                        Some(combine) => {
+                            let row = &mut ws.row;
+                            let _ = c2r.process_with_scratch(srow, row, &mut ws.fft_scratch);
+                            for v in row.iter_mut() {
+                                *v *= scale;
+                            }
+                            combine(f, r, row, rrow);
+                        }
                     }
                 }
             });
@@ -571,6 +617,22 @@ mod tests {
             t.inverse_many(&specs, &mut reals);
             for (a, b) in one.iter().zip(&many) {
                 assert!(a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits()));
+            }
+            // Rows handed over as finished: out -= 0.5 * row, against the stored inverse.
+            let mut combined = vec![vec![1.0; g.cells()]; 3];
+            let mut outs: Vec<&mut [f64]> = combined.iter_mut().map(|v| &mut v[..]).collect();
+            t.inverse_combine(&specs, &mut outs, |f, _, row, out| {
+                assert_eq!(row.len(), nx);
+                for (o, v) in out.iter_mut().zip(row) {
+                    *o -= 0.5 * (f as f64 + 1.0) * v;
+                }
+            });
+            for (f, (a, b)) in one.iter().zip(&combined).enumerate() {
+                let want = a.iter().map(|v| 1.0 - 0.5 * (f as f64 + 1.0) * v);
+                assert!(
+                    want.zip(b).all(|(x, y)| x.to_bits() == y.to_bits()),
+                    "field {f}"
+                );
             }
         }
     }
