@@ -70,6 +70,47 @@ pub use params::{
 /// [-1.1, 1.1]).
 pub const DIVERGENCE_BOUND: f64 = 10.0;
 
+/// `dst := i k_c src`, the spectrum of ∂_c of the field whose spectrum is `src`.
+fn spectral_derivative(
+    g: Grid,
+    w: &Wavenumbers,
+    c: usize,
+    src: &[Complex64],
+    dst: &mut [Complex64],
+) {
+    let nxh = g.nxh();
+    for_each_row(&mut [dst], nxh, |r, rows| {
+        let (iy, iz) = g.row_yz(r);
+        for ix in 0..nxh {
+            let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]][c];
+            rows[0][ix] = times_ik(k, src[r * nxh + ix]);
+        }
+    });
+}
+
+/// `out := ĥ` with `h = h(ψ, φ, ψ*)` at every node (`fields` = [ψ, φ, ψ*]), formed row by row
+/// as the transform takes it, so h is never stored.
+fn transform_pointwise(
+    t: &mut Transform,
+    out: &mut [Complex64],
+    fields: [&[f64]; 3],
+    h: impl Fn(f64, f64, f64) -> f64 + Sync,
+) {
+    let nx = t.grid().nx;
+    let [psi, phi, ps] = fields;
+    t.forward_rows(
+        &mut [out],
+        |_, r, row_out| {
+            let row = r * nx..(r + 1) * nx;
+            let (p, f, s) = (&psi[row.clone()], &phi[row.clone()], &ps[row]);
+            for (i, o) in row_out.iter_mut().enumerate() {
+                *o = h(p[i], f[i], s[i]);
+            }
+        },
+        Modes::All,
+    );
+}
+
 /// μ_φ = 3 e0 φ (ψ - ψ*)² at a node (see [`CahnHilliard::solid_chemical_potential`]).
 #[inline]
 fn mu_phi(e0: f64, psi: f64, phi: f64, ps: f64) -> f64 {
@@ -270,18 +311,12 @@ impl CahnHilliard {
 
     /// `g_hat := ĝ`, g = g(ψ, φ, ψ*) formed row by row as the transform takes it.
     fn bulk_transform(&mut self) {
-        let nx = self.grid.nx;
-        let (psi, phi, ps) = (&self.psi, &self.phi, &self.psi_star);
-        self.transform.forward_rows(
-            &mut [&mut self.g_hat[..]],
-            |_, r, out| {
-                let row = r * nx..(r + 1) * nx;
-                let (p, f, s) = (&psi[row.clone()], &phi[row.clone()], &ps[row]);
-                for (i, o) in out.iter_mut().enumerate() {
-                    *o = bulk_derivative(p[i], f[i], s[i]);
-                }
-            },
-            Modes::All,
+        let fields = [&self.psi[..], &self.phi, &self.psi_star];
+        transform_pointwise(
+            &mut self.transform,
+            &mut self.g_hat,
+            fields,
+            bulk_derivative,
         );
     }
 
@@ -487,17 +522,9 @@ impl CahnHilliard {
     /// through `g_hat`.
     fn derivative_into_work(&mut self, c: usize, of_psi: bool) {
         let g = self.grid;
-        let nxh = g.nxh();
         let w = &self.waves;
         let src = if of_psi { &self.psi_hat } else { &self.tmp_hat };
-        let mut fields = [&mut self.g_hat[..]];
-        for_each_row(&mut fields, nxh, |r, rows| {
-            let (iy, iz) = g.row_yz(r);
-            for ix in 0..nxh {
-                let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]][c];
-                rows[0][ix] = times_ik(k, src[r * nxh + ix]);
-            }
-        });
+        spectral_derivative(g, w, c, src, &mut self.g_hat);
         self.transform.inverse(&self.g_hat, &mut self.work);
     }
 
@@ -536,14 +563,7 @@ impl CahnHilliard {
             return;
         }
         for c in 0..g.dims {
-            let mut fields = [&mut self.g_hat[..]];
-            for_each_row(&mut fields, nxh, |r, rows| {
-                let (iy, iz) = g.row_yz(r);
-                for ix in 0..nxh {
-                    let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]][c];
-                    rows[0][ix] = times_ik(k, src[r * nxh + ix]);
-                }
-            });
+            spectral_derivative(g, w, c, src, &mut self.g_hat);
             self.transform
                 .inverse_combine(&[&self.g_hat], &mut out[c..c + 1], combine);
         }
@@ -573,21 +593,12 @@ impl CahnHilliard {
         self.mu_spectrum();
         self.gradient_product(&mut comps[..d], false);
         if self.phi.par_iter().any(|&p| p != 0.0) {
-            // μ_φ formed row by row; it vanishes off the solids, and those rows are skipped.
-            let nx = self.grid.nx;
+            // μ_φ vanishes off the solids, and those rows are skipped.
             let e0 = self.cfg.e0;
-            let (psi, phi, ps) = (&self.psi, &self.phi, &self.psi_star);
-            self.transform.forward_rows(
-                &mut [&mut self.tmp_hat[..]],
-                |_, r, out| {
-                    let row = r * nx..(r + 1) * nx;
-                    let (p, f, s) = (&psi[row.clone()], &phi[row.clone()], &ps[row]);
-                    for (i, o) in out.iter_mut().enumerate() {
-                        *o = mu_phi(e0, p[i], f[i], s[i]);
-                    }
-                },
-                Modes::All,
-            );
+            let fields = [&self.psi[..], &self.phi, &self.psi_star];
+            transform_pointwise(&mut self.transform, &mut self.tmp_hat, fields, |p, f, s| {
+                mu_phi(e0, p, f, s)
+            });
             self.gradient_product(&mut comps[..d], true);
         }
         Ok(())

@@ -77,6 +77,21 @@ struct Columns<'a> {
     keep: &'a [bool],
 }
 
+/// Call `f(ws, item)` for every `item < items`, in parallel: workspace `w` takes the items
+/// `w * per .. (w + 1) * per` in order (`per = ceil(items / workspaces)`).
+fn share_items(
+    workspaces: &mut [Workspace],
+    items: usize,
+    f: impl Fn(&mut Workspace, usize) + Sync + Send,
+) {
+    let per = items.div_ceil(workspaces.len().max(1));
+    workspaces.par_iter_mut().enumerate().for_each(|(w, ws)| {
+        for item in w * per..((w + 1) * per).min(items) {
+            f(ws, item);
+        }
+    });
+}
+
 /// Which modes a forward transform must deliver.
 #[derive(Clone, Copy, Debug)]
 pub enum Modes<'a> {
@@ -201,33 +216,29 @@ impl Transform {
         let bw = block(c.len);
         let blocks = c.width.div_ceil(bw);
         let per_field = c.outer * blocks;
-        let items = src.len() * per_field;
-        let per = items.div_ceil(workspaces.len());
-        workspaces.par_iter_mut().enumerate().for_each(|(g, ws)| {
-            for item in g * per..((g + 1) * per).min(items) {
-                let (f, rest) = (item / per_field, item % per_field);
-                let o = rest / blocks;
-                if !c.keep.get(o).copied().unwrap_or(true) {
-                    continue;
+        share_items(workspaces, src.len() * per_field, |ws, item| {
+            let (f, rest) = (item / per_field, item % per_field);
+            let o = rest / blocks;
+            if !c.keep.get(o).copied().unwrap_or(true) {
+                return;
+            }
+            let (src, dst) = (src[f], dst[f]);
+            let c0 = (rest % blocks) * bw;
+            let b = bw.min(c.width - c0);
+            let base = o * c.outer_stride + c0;
+            let lines = &mut ws.lines[..b * c.len];
+            for i in 0..c.len {
+                let p = base + i * c.stride;
+                for j in 0..b {
+                    // SAFETY: item (f, o, c0..c0 + b) owns these elements (see the caller).
+                    lines[j * c.len + i] = unsafe { *src.0.add(p + j) };
                 }
-                let (src, dst) = (src[f], dst[f]);
-                let c0 = (rest % blocks) * bw;
-                let b = bw.min(c.width - c0);
-                let base = o * c.outer_stride + c0;
-                let lines = &mut ws.lines[..b * c.len];
-                for i in 0..c.len {
-                    let p = base + i * c.stride;
-                    for j in 0..b {
-                        // SAFETY: item (f, o, c0..c0 + b) owns these elements (see the caller).
-                        lines[j * c.len + i] = unsafe { *src.0.add(p + j) };
-                    }
-                }
-                fft.process_with_scratch(lines, &mut ws.fft_scratch);
-                for i in 0..c.len {
-                    let p = base + i * c.stride;
-                    for j in 0..b {
-                        unsafe { *dst.0.add(p + j) = lines[j * c.len + i] };
-                    }
+            }
+            fft.process_with_scratch(lines, &mut ws.fft_scratch);
+            for i in 0..c.len {
+                let p = base + i * c.stride;
+                for j in 0..b {
+                    unsafe { *dst.0.add(p + j) = lines[j * c.len + i] };
                 }
             }
         });
@@ -271,28 +282,20 @@ impl Transform {
         }
         let ptrs = &ptrs[..k];
         let active = self.active(k);
-        let items = k * rows;
-        let per = items.div_ceil(active);
         let r2c = &self.r2c;
-        self.workspaces[..active]
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(w, ws)| {
-                for item in w * per..((w + 1) * per).min(items) {
-                    let (f, r) = (item / rows, item % rows);
-                    // SAFETY: row r of spectrum f is written by this item only; the spectra
-                    // are distinct exclusive borrows of the grid's size (asserted above).
-                    let srow =
-                        unsafe { std::slice::from_raw_parts_mut(ptrs[f].0.add(r * nxh), nxh) };
-                    row(f, r, &mut ws.row);
-                    if ws.row.iter().all(|&v| v == 0.0) {
-                        srow.fill(Complex64::default());
-                    } else {
-                        // Lengths are right by construction; realfft reports nothing else.
-                        let _ = r2c.process_with_scratch(&mut ws.row, srow, &mut ws.fft_scratch);
-                    }
-                }
-            });
+        share_items(&mut self.workspaces[..active], k * rows, |ws, item| {
+            let (f, r) = (item / rows, item % rows);
+            // SAFETY: row r of spectrum f is written by this item only; the spectra
+            // are distinct exclusive borrows of the grid's size (asserted above).
+            let srow = unsafe { std::slice::from_raw_parts_mut(ptrs[f].0.add(r * nxh), nxh) };
+            row(f, r, &mut ws.row);
+            if ws.row.iter().all(|&v| v == 0.0) {
+                srow.fill(Complex64::default());
+            } else {
+                // Lengths are right by construction; realfft reports nothing else.
+                let _ = r2c.process_with_scratch(&mut ws.row, srow, &mut ws.fft_scratch);
+            }
+        });
         let (width, ky): (usize, &[bool]) = match modes {
             Modes::All => (nxh, &[]),
             Modes::Band { kx, ky } => (kx.min(nxh), if g.dims == 3 { ky } else { &[] }),
@@ -405,49 +408,42 @@ impl Transform {
         }
         let out = &out[..k];
         let scale = 1.0 / g.cells() as f64;
-        let items = k * rows;
-        let per = items.div_ceil(active);
         let c2r = &self.c2r;
         let even = nx % 2 == 0;
-        self.workspaces[..active]
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(t, ws)| {
-                for item in t * per..((t + 1) * per).min(items) {
-                    let (f, r) = (item / rows, item % rows);
-                    if !only.get(r).copied().unwrap_or(true) {
-                        continue;
-                    }
-                    // SAFETY: row r of work spectrum f and of real field f belong to this item
-                    // only; the work spectra are self's, the fields distinct exclusive borrows.
-                    let (srow, rrow) = unsafe {
-                        (
-                            std::slice::from_raw_parts_mut(w[f].0.add(r * nxh), nxh),
-                            std::slice::from_raw_parts_mut(out[f].0.add(r * nx), nx),
-                        )
-                    };
-                    srow[0].im = 0.0;
-                    if even {
-                        srow[nxh - 1].im = 0.0;
-                    }
-                    match combine {
-                        None => {
-                            let _ = c2r.process_with_scratch(srow, rrow, &mut ws.fft_scratch);
-                            for v in rrow.iter_mut() {
-                                *v *= scale;
-                            }
-                        }
-                        Some(combine) => {
-                            let row = &mut ws.row;
-                            let _ = c2r.process_with_scratch(srow, row, &mut ws.fft_scratch);
-                            for v in row.iter_mut() {
-                                *v *= scale;
-                            }
-                            combine(f, r, row, rrow);
-                        }
+        share_items(&mut self.workspaces[..active], k * rows, |ws, item| {
+            let (f, r) = (item / rows, item % rows);
+            if !only.get(r).copied().unwrap_or(true) {
+                return;
+            }
+            // SAFETY: row r of work spectrum f and of real field f belong to this item
+            // only; the work spectra are self's, the fields distinct exclusive borrows.
+            let (srow, rrow) = unsafe {
+                (
+                    std::slice::from_raw_parts_mut(w[f].0.add(r * nxh), nxh),
+                    std::slice::from_raw_parts_mut(out[f].0.add(r * nx), nx),
+                )
+            };
+            srow[0].im = 0.0;
+            if even {
+                srow[nxh - 1].im = 0.0;
+            }
+            match combine {
+                None => {
+                    let _ = c2r.process_with_scratch(srow, rrow, &mut ws.fft_scratch);
+                    for v in rrow.iter_mut() {
+                        *v *= scale;
                     }
                 }
-            });
+                Some(combine) => {
+                    let row = &mut ws.row;
+                    let _ = c2r.process_with_scratch(srow, row, &mut ws.fft_scratch);
+                    for v in row.iter_mut() {
+                        *v *= scale;
+                    }
+                    combine(f, r, row, rrow);
+                }
+            }
+        });
     }
 }
 
