@@ -43,7 +43,7 @@ pub struct SpectralNs {
     /// Spectral velocity components (the state).
     u_hat: Vec<Vec<Complex64>>,
     /// Advection term (3D) or the transformed products `u_a u_b` it is formed from (2D, in
-    /// the order of [`pair`]), then the transformed penalty force.
+    /// the order of [`PAIRS_2D`]), then the transformed penalty force.
     nl_hat: Vec<Vec<Complex64>>,
     /// Stored kx that the 2/3 rule keeps (a prefix).
     kept_kx: usize,
@@ -208,8 +208,10 @@ impl SpectralNs {
         self.sync_rows(&[]);
     }
 
-    /// [`Self::sync_real`] on the rows flagged in `rows` only (empty: all).
-    fn sync_rows(&mut self, rows: &[bool]) {
+    /// Real field := inverse transform of the spectral state, on the rows flagged in `rows`
+    /// only (empty: all): e.g. to bring more rows of u* up to date after
+    /// [`Self::advance_intermediate_on`].
+    pub fn sync_rows(&mut self, rows: &[bool]) {
         let d = self.grid.dims;
         let specs: [&[Complex64]; 3] = std::array::from_fn(|c| match self.u_hat.get(c) {
             Some(h) => &h[..],
