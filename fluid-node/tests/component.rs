@@ -226,27 +226,11 @@ fn a_runaway_flow_stops_with_the_advective_limit_named() {
 /// same bits as a node restored between the phases, whose u* is whole.
 #[test]
 fn penalty_at_corrected_positions_sees_the_whole_u_star() {
-    let moved = |n| {
-        let mut s = fibre_states(n, 1e-3);
-        for b in &mut s {
-            b.position[1] += 2.5;
-        }
-        s
-    };
-    let (mut a, mut xa, _) = configure(FIBRE_SCENE);
-    run(&mut a, &mut xa, 0, 3);
-    xa.publish_states(Port::BeadPositions, 4, &fibre_states(3, 0.0))
-        .unwrap();
-    a.run_phase(3, Phase::FluidMomentumExchange, &mut xa)
-        .unwrap();
-    let mid = a.save_state().unwrap();
-    xa.publish_states(Port::BeadStates, 4, &moved(3)).unwrap();
-    let ra = a.run_phase(3, Phase::FluidPenalty, &mut xa).unwrap();
-    let (mut b, mut xb, _) = configure(FIBRE_SCENE);
-    b.restore_state(&mid).unwrap();
-    xb.publish_states(Port::BeadStates, 4, &moved(3)).unwrap();
-    let rb = b.run_phase(3, Phase::FluidPenalty, &mut xb).unwrap();
-    assert_eq!(ra, rb);
+    let mut moved = fibre_states(3, 1e-3);
+    for b in &mut moved {
+        b.position[1] += 2.5;
+    }
+    let [(a, _), (b, _)] = penalty_in_both(&moved);
     let bits = |c: &FluidComponent| {
         c.velocity()
             .iter()
@@ -255,6 +239,31 @@ fn penalty_at_corrected_positions_sees_the_whole_u_star() {
             .collect::<Vec<_>>()
     };
     assert_eq!(bits(&a), bits(&b));
+}
+
+/// Steps 0-2, then step 3's momentum exchange; then step 3's penalty with `penalty_states`
+/// in that node and in one restored from a save made between the two phases. Asserts the
+/// two reports equal; returns both nodes with their exchanges.
+fn penalty_in_both(
+    penalty_states: &[cosim::BeadState],
+) -> [(FluidComponent, InProcessExchange); 2] {
+    let (mut a, mut xa, _) = configure(FIBRE_SCENE);
+    run(&mut a, &mut xa, 0, 3);
+    xa.publish_states(Port::BeadPositions, 4, &fibre_states(3, 0.0))
+        .unwrap();
+    a.run_phase(3, Phase::FluidMomentumExchange, &mut xa)
+        .unwrap();
+    let mid = a.save_state().unwrap();
+    let (mut b, mut xb, _) = configure(FIBRE_SCENE);
+    b.restore_state(&mid).unwrap();
+    let mut reports = Vec::new();
+    for (c, x) in [(&mut a, &mut xa), (&mut b, &mut xb)] {
+        x.publish_states(Port::BeadStates, 4, penalty_states)
+            .unwrap();
+        reports.push(c.run_phase(3, Phase::FluidPenalty, x).unwrap());
+    }
+    assert_eq!(reports[0], reports[1]);
+    [(a, xa), (b, xb)]
 }
 
 #[test]
@@ -269,22 +278,7 @@ fn save_and_restore_are_bit_exact_also_mid_step() {
     assert_eq!(run(&mut b, &mut xb, 5, 5), reference);
 
     // Saved between the two phases of a step (u* pending).
-    let (mut a, mut xa, _) = configure(FIBRE_SCENE);
-    run(&mut a, &mut xa, 0, 3);
-    xa.publish_states(Port::BeadPositions, 4, &fibre_states(3, 0.0))
-        .unwrap();
-    a.run_phase(3, Phase::FluidMomentumExchange, &mut xa)
-        .unwrap();
-    let mid = a.save_state().unwrap();
-    xa.publish_states(Port::BeadStates, 4, &fibre_states(3, 1e-3))
-        .unwrap();
-    let ra = a.run_phase(3, Phase::FluidPenalty, &mut xa).unwrap();
-    let (mut b, mut xb, _) = configure(FIBRE_SCENE);
-    b.restore_state(&mid).unwrap();
-    xb.publish_states(Port::BeadStates, 4, &fibre_states(3, 1e-3))
-        .unwrap();
-    let rb = b.run_phase(3, Phase::FluidPenalty, &mut xb).unwrap();
-    assert_eq!(ra, rb);
+    let [(mut a, mut xa), (mut b, mut xb)] = penalty_in_both(&fibre_states(3, 1e-3));
     assert_eq!(run(&mut a, &mut xa, 4, 2), run(&mut b, &mut xb, 4, 2));
 
     // Refusals.
