@@ -257,19 +257,17 @@ impl SpectralNs {
             ky: &self.waves.y.keep,
         };
         let u = &self.u;
+        // Row r of u_a u_b.
+        let product = |(a, b): (usize, usize), r: usize, out: &mut [f64]| {
+            let (ua, ub) = (&u[a][r * nx..(r + 1) * nx], &u[b][r * nx..(r + 1) * nx]);
+            for ((o, x), y) in out.iter_mut().zip(ua).zip(ub) {
+                *o = x * y;
+            }
+        };
         if d == 2 {
             let mut specs = slices(&mut self.nl_hat);
-            self.transform.forward_rows(
-                &mut specs,
-                |f, r, out| {
-                    let (a, b) = PAIRS_2D[f];
-                    let (ua, ub) = (&u[a][r * nx..(r + 1) * nx], &u[b][r * nx..(r + 1) * nx]);
-                    for ((o, x), y) in out.iter_mut().zip(ua).zip(ub) {
-                        *o = x * y;
-                    }
-                },
-                band,
-            );
+            self.transform
+                .forward_rows(&mut specs, |f, r, out| product(PAIRS_2D[f], r, out), band);
             return;
         }
         for h in self.nl_hat.iter_mut() {
@@ -281,12 +279,7 @@ impl SpectralNs {
             for b in a..d {
                 self.transform.forward_rows(
                     &mut [&mut self.tmp_hat[..]],
-                    |_, r, out| {
-                        let (ua, ub) = (&u[a][r * nx..(r + 1) * nx], &u[b][r * nx..(r + 1) * nx]);
-                        for ((o, x), y) in out.iter_mut().zip(ua).zip(ub) {
-                            *o = x * y;
-                        }
-                    },
+                    |_, r, out| product((a, b), r, out),
                     band,
                 );
                 let w = &self.waves;
