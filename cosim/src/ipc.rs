@@ -338,12 +338,15 @@ pub(crate) fn control_service<S: Service>(
         .map_err(IpcError::iox(format!("open service {name}")))
 }
 
+/// A wake-up event. Only event id 0 is ever sent, and a wait drains every id up to the
+/// service's largest (iceoryx2's default 255: 256 atomic swaps per wait), so there is one.
 pub(crate) fn event_service<S: Service>(
     node: &Node<S>,
     name: &str,
 ) -> Result<iceoryx2::service::port_factory::event::PortFactory<S>, IpcError> {
     node.service_builder(&service_name(name)?)
         .event()
+        .event_id_max_value(0)
         .open_or_create()
         .map_err(IpcError::iox(format!("open service {name}")))
 }

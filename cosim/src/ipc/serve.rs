@@ -157,16 +157,14 @@ impl Peers {
             let notifier = event_service(node, &names.wake)?
                 .notifier_builder()
                 .create()
-                .map_err(IpcError::iox(format!(
-                    "create a wake notifier for node {name}"
-                )))?;
+                .map_err(|e| IpcError::iox(format!("create a wake notifier for node {name}"))(e))?;
             self.0.push((name.to_string(), notifier));
         }
         let (_, notifier) = self.0.iter().find(|(n, _)| n == name).expect("just made");
         notifier
             .notify()
             .map(drop)
-            .map_err(IpcError::iox(format!("wake node {name}")))
+            .map_err(|e| IpcError::iox(format!("wake node {name}"))(e))
     }
 }
 
@@ -267,7 +265,8 @@ impl Batch<'_> {
         kind: usize,
     ) -> Result<Option<Request>, IpcError> {
         let Awaited { port, step } = awaited;
-        let lost = IpcError::iox(format!("read port {}", port.name()));
+        // The message is formed only on failure: this runs every step.
+        let lost = |e| IpcError::iox(format!("read port {}", port.name()))(e);
         if !self.poller.skips_polling(kind) {
             let fresh = || exchange.has_fresh(port, step).map(|f| f.then_some(()));
             if self.poller.poll(fresh).map_err(lost)?.is_some() {
@@ -276,10 +275,7 @@ impl Batch<'_> {
         }
         self.poller.blocked();
         loop {
-            if exchange
-                .has_fresh(port, step)
-                .map_err(IpcError::iox(format!("read port {}", port.name())))?
-            {
+            if exchange.has_fresh(port, step).map_err(lost)? {
                 return Ok(None);
             }
             if let Some(r) = self
