@@ -88,10 +88,6 @@ struct Run {
     binary: Option<BinaryFluid>,
     /// The step whose `fluid-phase-field` ran last (binary fluids).
     psi_step: Option<u64>,
-    /// Rows on which the momentum exchange brought the real u* up to date (the solids' rows
-    /// then); the penalty brings the rest of its own solids' rows up to date, should the
-    /// corrected positions cover a row more.
-    u_star_rows: Vec<bool>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -207,8 +203,7 @@ impl FluidComponent {
                 // Eq. 34: u^n -> u*. With solids the penalty rebuilds the whole real field,
                 // and until then u* is read only on the solids' rows.
                 if run.spm.has_solids() {
-                    run.u_star_rows.copy_from_slice(run.spm.solid_rows());
-                    run.ns.advance_intermediate_on(&run.u_star_rows);
+                    run.ns.advance_intermediate_on(run.spm.solid_rows());
                 } else {
                     run.ns.advance_intermediate();
                 }
@@ -256,21 +251,13 @@ impl FluidComponent {
                     run.read_states(step, phase, exchange)?;
                 }
                 if run.spm.has_solids() {
-                    // Sub-cycled fibres correct their positions after the impulses: a bead
-                    // box can then reach a row on which u* is not yet up to date.
-                    let mut missing = false;
-                    for (done, &solid) in run.u_star_rows.iter_mut().zip(run.spm.solid_rows()) {
-                        *done = solid && !*done;
-                        missing |= *done;
-                    }
-                    if missing {
-                        run.ns.sync_rows(&run.u_star_rows);
-                    }
-                    run.u_star_rows.fill(true);
-                    // Eqs. 37-38.
+                    // Eqs. 37-38. The penalty reads u* on the solids' rows at the new
+                    // positions; a sub-cycled fibre may have moved a bead onto a row the
+                    // impulses did not read, and the solver brings such rows up to date.
                     let (spm, states) = (&run.spm, &run.states);
-                    run.ns
-                        .add_projected(|c, r, u_c, out| spm.penalty_row((c, r), u_c, states, out));
+                    run.ns.add_projected(spm.solid_rows(), |c, r, u_c, out| {
+                        spm.penalty_row((c, r), u_c, states, out)
+                    });
                 }
                 run.pending = None;
                 run.report(step, detail)
@@ -687,7 +674,6 @@ impl Component for FluidComponent {
             impulses: vec![BeadImpulse::default(); total_beads],
             binary,
             psi_step: None,
-            u_star_rows: vec![true; grid.rows()],
         });
         Ok(configured)
     }

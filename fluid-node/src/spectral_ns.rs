@@ -38,8 +38,14 @@ pub struct SpectralNs {
     body_accel: [f64; 3],
     /// `exp(-ν k_a² Δt)` per axis: `E` is their product.
     decay: [Vec<f64>; 3],
-    /// Real velocity components (the inverse transform of `u_hat`).
+    /// Real velocity components (the inverse transform of `u_hat`, except on `stale` rows).
     u: Vec<Vec<f64>>,
+    /// Rows (`z * ny + y`) of `u` that still hold uⁿ after [`SpectralNs::advance_intermediate_on`]
+    /// until [`SpectralNs::add_projected`] rebuilds them; `any_stale` says whether there are any.
+    stale: Vec<bool>,
+    any_stale: bool,
+    /// Scratch flags: the stale rows a penalty reads.
+    missing: Vec<bool>,
     /// Spectral velocity components (the state).
     u_hat: Vec<Vec<Complex64>>,
     /// Advection term (3D) or the transformed products `u_a u_b` it is formed from (2D, in
@@ -91,6 +97,9 @@ impl SpectralNs {
             body_accel: body,
             decay,
             u: vec![vec![0.0; grid.cells()]; d],
+            stale: vec![false; grid.rows()],
+            any_stale: false,
+            missing: vec![false; grid.rows()],
             u_hat: vec![vec![Complex64::default(); grid.modes()]; d],
             nl_hat: vec![vec![Complex64::default(); grid.modes()]; if d == 2 { 3 } else { d }],
             kept_kx,
@@ -162,12 +171,14 @@ impl SpectralNs {
         self.dt
     }
 
-    /// Real velocity component `c` (x fastest, see [`Grid::index`]).
+    /// Real velocity component `c` (x fastest, see [`Grid::index`]). Between
+    /// [`Self::advance_intermediate_on`] and [`Self::add_projected`] only the rows it updated
+    /// hold u*; the others still hold uⁿ.
     pub fn velocity(&self, c: usize) -> &[f64] {
         &self.u[c]
     }
 
-    /// All real velocity components.
+    /// All real velocity components (see [`Self::velocity`] for the rows that lag).
     pub fn velocity_components(&self) -> &[Vec<f64>] {
         &self.u
     }
@@ -205,21 +216,26 @@ impl SpectralNs {
 
     /// Real field := inverse transform of the spectral state.
     fn sync_real(&mut self) {
-        self.sync_rows(&[]);
+        Self::sync_rows(&mut self.transform, &self.u_hat, &mut self.u, &[]);
+        self.stale.fill(false);
+        self.any_stale = false;
     }
 
     /// Real field := inverse transform of the spectral state, on the rows flagged in `rows`
-    /// only (empty: all): e.g. to bring more rows of u* up to date after
-    /// [`Self::advance_intermediate_on`].
-    pub fn sync_rows(&mut self, rows: &[bool]) {
-        let d = self.grid.dims;
-        let specs: [&[Complex64]; 3] = std::array::from_fn(|c| match self.u_hat.get(c) {
+    /// only (empty: all).
+    fn sync_rows(
+        transform: &mut Transform,
+        u_hat: &[Vec<Complex64>],
+        u: &mut [Vec<f64>],
+        rows: &[bool],
+    ) {
+        let d = u.len();
+        let specs: [&[Complex64]; 3] = std::array::from_fn(|c| match u_hat.get(c) {
             Some(h) => &h[..],
             None => &[],
         });
-        let mut reals = slices(&mut self.u);
-        self.transform
-            .inverse_rows(&specs[..d], &mut reals[..d], rows);
+        let mut reals = slices(u);
+        transform.inverse_rows(&specs[..d], &mut reals[..d], rows);
     }
 
     fn project_state(&mut self) {
@@ -327,10 +343,10 @@ impl SpectralNs {
     }
 
     /// [`Self::advance_intermediate`] that updates the real field only on the grid rows
-    /// flagged in `rows` (`z * ny + y`; empty: all). The other rows keep uⁿ until the next
-    /// [`Self::add_projected`] (or [`Self::advance_intermediate`]) rebuilds the whole real
-    /// field: for a step whose penalty follows and which reads u* only where there are
-    /// solids (the impulses and the penalty of L2020 eqs. 35-38).
+    /// flagged in `rows` (`z * ny + y`; empty: all). The other rows keep uⁿ, and the solver
+    /// remembers them: [`Self::add_projected`] brings those it reads up to date first, then
+    /// rebuilds the whole real field. For a step whose penalty follows and which reads u*
+    /// only where there are solids (the impulses and the penalty of L2020 eqs. 35-38).
     pub fn advance_intermediate_on(&mut self, rows: &[bool]) {
         self.advection();
         let g = self.grid;
@@ -383,7 +399,11 @@ impl SpectralNs {
                 }
             }
         });
-        self.sync_rows(rows);
+        Self::sync_rows(&mut self.transform, &self.u_hat, &mut self.u, rows);
+        for (s, &on) in self.stale.iter_mut().zip(rows) {
+            *s = !on;
+        }
+        self.any_stale = rows.iter().any(|&on| !on);
     }
 
     /// `û += P f̂` with `f` given component by component in real space (L2020 eqs. 37–38:
@@ -391,9 +411,27 @@ impl SpectralNs {
     /// real field is updated.
     ///
     /// `force(c, r, u_c, out)` writes row `r` of component `c` of the force into `out` (every
-    /// element), given row `r` of the real velocity component `u_c`. Rows are formed as the
-    /// transform takes them, all components in one batch, so `f` is never stored.
-    pub fn add_projected(&mut self, force: impl Fn(usize, usize, &[f64], &mut [f64]) + Sync) {
+    /// element), given row `r` of the real velocity component `u_c`; it may read `u_c` only
+    /// on the rows flagged in `reads` (empty: all), which are brought up to date first if
+    /// [`Self::advance_intermediate_on`] left them behind (a sub-cycled fibre corrects its
+    /// positions after the impulses, so its penalty can reach a row the impulses did not).
+    /// Rows are formed as the transform takes them, all components in one batch, so `f` is
+    /// never stored.
+    pub fn add_projected(
+        &mut self,
+        reads: &[bool],
+        force: impl Fn(usize, usize, &[f64], &mut [f64]) + Sync,
+    ) {
+        if self.any_stale {
+            let mut missing = false;
+            for (r, m) in self.missing.iter_mut().enumerate() {
+                *m = self.stale[r] && reads.get(r).copied().unwrap_or(reads.is_empty());
+                missing |= *m;
+            }
+            if missing {
+                Self::sync_rows(&mut self.transform, &self.u_hat, &mut self.u, &self.missing);
+            }
+        }
         let g = self.grid;
         let d = g.dims;
         let nx = g.nx;
@@ -740,11 +778,36 @@ mod tests {
                     out.fill(0.0);
                 }
             };
-            full.add_projected(force);
-            part.add_projected(force);
+            full.add_projected(&[], force);
+            part.add_projected(&rows, force);
             for c in 0..g.dims {
                 let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(part.velocity(c)), bits(full.velocity(c)), "{g:?} {c}");
+            }
+            // A penalty that reads rows the partial update left behind (a sub-cycled fibre's
+            // corrected positions): the solver brings them up to date before it reads them.
+            let (mut full, mut part) = (start(), start());
+            let reads: Vec<bool> = (0..g.rows()).map(|r| r % 3 == 1 || r % 4 == 0).collect();
+            full.advance_intermediate();
+            part.advance_intermediate_on(&rows);
+            let force = |c: usize, r: usize, u: &[f64], out: &mut [f64]| {
+                if reads[r] {
+                    for (o, v) in out.iter_mut().zip(u) {
+                        *o = 0.2 * (c as f64 + 1.0) - v;
+                    }
+                } else {
+                    out.fill(0.0);
+                }
+            };
+            full.add_projected(&[], force);
+            part.add_projected(&reads, force);
+            for c in 0..g.dims {
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(
+                    bits(part.velocity(c)),
+                    bits(full.velocity(c)),
+                    "{g:?} {c} reads"
+                );
             }
         }
     }
