@@ -19,12 +19,13 @@
 //!
 //! The penalty of L2020 eqs. 37–38 is added by [`SpectralNs::add_projected`]: `ûⁿ⁺¹ = û* + P f̂`.
 //!
-//! The spectral velocity `û` is the state; the real velocity is always the inverse transform
-//! of `û` (a deterministic function of it), so saving `û` saves everything.
+//! The spectral velocity `û` is the state; between steps the real velocity is the inverse
+//! transform of `û` (a deterministic function of it), so saving `û` saves everything. Within
+//! an SPM step, [`SpectralNs::advance_intermediate_on`] may leave rows behind, which the
+//! solver remembers and [`SpectralNs::add_projected`] rebuilds.
 use crate::grid::{Grid, Wavenumbers};
-use crate::parallel::{for_each_row, grain, ordered_sum, per_row};
+use crate::parallel::{for_each_row, ordered_sum, per_row};
 use crate::transform::{Modes, Transform};
-use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
 /// The flow solver: fields, plans and scratch for one grid.
@@ -286,13 +287,11 @@ impl SpectralNs {
                 .forward_rows(&mut specs, |f, r, out| product(PAIRS_2D[f], r, out), band);
             return;
         }
-        for h in self.nl_hat.iter_mut() {
-            h.par_iter_mut()
-                .with_min_len(grain())
-                .for_each(|v| *v = Complex64::default());
-        }
+        // The first product each N_c appears in, (0, c), writes it instead of adding to it:
+        // no pass zeroes the three spectra first.
         for a in 0..d {
             for b in a..d {
+                let (set_first, set_second) = (a == 0 && b == 0, a == 0 && b > 0);
                 self.transform.forward_rows(
                     &mut [&mut self.tmp_hat[..]],
                     |_, r, out| product((a, b), r, out),
@@ -326,9 +325,19 @@ impl SpectralNs {
                         let p = p_row[ix];
                         // N_a -= i k_b P; N_b -= i k_a P (a != b). Modes outside the band
                         // get unfinished values, which the step never reads.
-                        rows[0][ix] += minus_i_k(axis_k(b, ix, iy, iz), p);
+                        let n = minus_i_k(axis_k(b, ix, iy, iz), p);
+                        if set_first {
+                            rows[0][ix] = n;
+                        } else {
+                            rows[0][ix] += n;
+                        }
                         if rows.len() == 2 {
-                            rows[1][ix] += minus_i_k(axis_k(a, ix, iy, iz), p);
+                            let n = minus_i_k(axis_k(a, ix, iy, iz), p);
+                            if set_second {
+                                rows[1][ix] = n;
+                            } else {
+                                rows[1][ix] += n;
+                            }
                         }
                     }
                 });
