@@ -6,8 +6,10 @@
 //!
 //! Forward: realfft r2c along x (the contiguous last axis) row by row, then rustfft along y and
 //! (in 3D) z in place, gathering blocks of neighbouring columns (see [`BLOCK_VALUES`]) into a
-//! contiguous workspace so that the strided axes are read in long contiguous runs. The forward transform is
-//! unnormalised; the inverse divides by the number of cells.
+//! contiguous workspace so that the strided axes are read in long contiguous runs. In 3D the
+//! rows and the y columns of one z plane are transformed together while the plane is in the
+//! cache (the inverse: y columns then rows), so the spectrum crosses memory once less each
+//! way. The forward transform is unnormalised; the inverse divides by the number of cells.
 //!
 //! Work is split over a fixed set of workspaces allocated with the plans; a transform
 //! allocates nothing. Every line is transformed by the same plan whatever the split, so the
@@ -213,8 +215,7 @@ impl Transform {
         dst: &[SharedPtr<Complex64>],
         c: Columns,
     ) {
-        let bw = block(c.len);
-        let blocks = c.width.div_ceil(bw);
+        let blocks = c.width.div_ceil(block(c.len));
         let per_field = c.outer * blocks;
         share_items(workspaces, src.len() * per_field, |ws, item| {
             let (f, rest) = (item / per_field, item % per_field);
@@ -222,26 +223,49 @@ impl Transform {
             if !c.keep.get(o).copied().unwrap_or(true) {
                 return;
             }
-            let (src, dst) = (src[f], dst[f]);
-            let c0 = (rest % blocks) * bw;
-            let b = bw.min(c.width - c0);
-            let base = o * c.outer_stride + c0;
-            let lines = &mut ws.lines[..b * c.len];
-            for i in 0..c.len {
-                let p = base + i * c.stride;
-                for j in 0..b {
-                    // SAFETY: item (f, o, c0..c0 + b) owns these elements (see the caller).
-                    lines[j * c.len + i] = unsafe { *src.0.add(p + j) };
-                }
-            }
-            fft.process_with_scratch(lines, &mut ws.fft_scratch);
-            for i in 0..c.len {
-                let p = base + i * c.stride;
-                for j in 0..b {
-                    unsafe { *dst.0.add(p + j) = lines[j * c.len + i] };
-                }
-            }
+            // SAFETY: item (f, o, block) owns these elements (see the caller).
+            unsafe { Self::column_block(ws, fft, (src[f], dst[f]), &c, o, rest % blocks) };
         });
+    }
+
+    /// Transform block `blk` of the columns of group `o` (see [`Columns`]) of `src` into `dst`.
+    ///
+    /// # Safety
+    /// As for [`Self::columns`]; no other task touches these columns meanwhile.
+    unsafe fn column_block(
+        ws: &mut Workspace,
+        fft: &dyn Fft<f64>,
+        (src, dst): (SharedPtr<Complex64>, SharedPtr<Complex64>),
+        c: &Columns,
+        o: usize,
+        blk: usize,
+    ) {
+        let bw = block(c.len);
+        let c0 = blk * bw;
+        let b = bw.min(c.width - c0);
+        let base = o * c.outer_stride + c0;
+        let lines = &mut ws.lines[..b * c.len];
+        for i in 0..c.len {
+            let p = base + i * c.stride;
+            for j in 0..b {
+                lines[j * c.len + i] = unsafe { *src.0.add(p + j) };
+            }
+        }
+        fft.process_with_scratch(lines, &mut ws.fft_scratch);
+        for i in 0..c.len {
+            let p = base + i * c.stride;
+            for j in 0..b {
+                unsafe { *dst.0.add(p + j) = lines[j * c.len + i] };
+            }
+        }
+    }
+
+    /// Whether the y columns are transformed plane by plane together with the rows of the
+    /// plane: in 3D a z plane's spectrum (`ny * nxh` values) stays in the cache between the
+    /// row and the column transforms, so the spectrum crosses memory once less each way. 2D
+    /// has one plane and keeps the separate passes, which share rows and columns out.
+    fn by_planes(&self, fields: usize) -> bool {
+        self.fz.is_some() && fields * self.grid.nz >= self.workspaces.len()
     }
 
     /// Unnormalised forward transform of `real` into `spec`.
@@ -283,8 +307,12 @@ impl Transform {
         let ptrs = &ptrs[..k];
         let active = self.active(k);
         let r2c = &self.r2c;
-        share_items(&mut self.workspaces[..active], k * rows, |ws, item| {
-            let (f, r) = (item / rows, item % rows);
+        let (width, ky): (usize, &[bool]) = match modes {
+            Modes::All => (nxh, &[]),
+            Modes::Band { kx, ky } => (kx.min(nxh), if g.dims == 3 { ky } else { &[] }),
+        };
+        let (ycols, zcols) = (self.y_columns(width), self.z_columns(width, ky));
+        let one_row = |ws: &mut Workspace, f: usize, r: usize| {
             // SAFETY: row r of spectrum f is written by this item only; the spectra
             // are distinct exclusive borrows of the grid's size (asserted above).
             let srow = unsafe { std::slice::from_raw_parts_mut(ptrs[f].0.add(r * nxh), nxh) };
@@ -295,19 +323,39 @@ impl Transform {
                 // Lengths are right by construction; realfft reports nothing else.
                 let _ = r2c.process_with_scratch(&mut ws.row, srow, &mut ws.fft_scratch);
             }
-        });
-        let (width, ky): (usize, &[bool]) = match modes {
-            Modes::All => (nxh, &[]),
-            Modes::Band { kx, ky } => (kx.min(nxh), if g.dims == 3 { ky } else { &[] }),
         };
-        let (ycols, zcols) = (self.y_columns(width), self.z_columns(width, ky));
-        // SAFETY: as for the rows.
-        unsafe {
-            let ws = &mut self.workspaces[..active];
-            Self::columns(ws, &*self.fy[0], ptrs, ptrs, ycols);
-            if let Some(fz) = &self.fz {
-                Self::columns(ws, &*fz[0], ptrs, ptrs, zcols);
-            }
+        if self.by_planes(k) {
+            let (ny, nz) = (g.ny, g.nz);
+            let blocks = width.div_ceil(block(ny));
+            let fy = &*self.fy[0];
+            share_items(&mut self.workspaces[..active], k * nz, |ws, item| {
+                let (f, z) = (item / nz, item % nz);
+                for y in 0..ny {
+                    one_row(ws, f, z * ny + y);
+                }
+                for blk in 0..blocks {
+                    // SAFETY: plane z of spectrum f belongs to this item only.
+                    unsafe { Self::column_block(ws, fy, (ptrs[f], ptrs[f]), &ycols, z, blk) };
+                }
+            });
+        } else {
+            share_items(&mut self.workspaces[..active], k * rows, |ws, item| {
+                one_row(ws, item / rows, item % rows)
+            });
+            // SAFETY: as for the rows.
+            unsafe {
+                Self::columns(
+                    &mut self.workspaces[..active],
+                    &*self.fy[0],
+                    ptrs,
+                    ptrs,
+                    ycols,
+                )
+            };
+        }
+        if let Some(fz) = &self.fz {
+            // SAFETY: as for the rows.
+            unsafe { Self::columns(&mut self.workspaces[..active], &*fz[0], ptrs, ptrs, zcols) };
         }
     }
 
@@ -391,12 +439,15 @@ impl Transform {
         let nxh = g.nxh();
         let (ycols, zcols) = (self.y_columns(nxh), self.z_columns(nxh, &[]));
         let active = self.active(k);
+        let by_planes = self.by_planes(k);
         let ws = &mut self.workspaces[..active];
         // SAFETY: sizes asserted by the caller; `src` is only read, `work` is owned by self.
         unsafe {
             if let Some(fz) = &self.fz {
                 Self::columns(ws, &*fz[1], src, w, zcols);
-                Self::columns(ws, &*self.fy[1], w, w, ycols);
+                if !by_planes {
+                    Self::columns(ws, &*self.fy[1], w, w, ycols);
+                }
             } else {
                 Self::columns(ws, &*self.fy[1], src, w, ycols);
             }
@@ -410,9 +461,9 @@ impl Transform {
         let scale = 1.0 / g.cells() as f64;
         let c2r = &self.c2r;
         let even = nx % 2 == 0;
-        share_items(&mut self.workspaces[..active], k * rows, |ws, item| {
-            let (f, r) = (item / rows, item % rows);
-            if !only.get(r).copied().unwrap_or(true) {
+        let wanted = |r: usize| only.get(r).copied().unwrap_or(true);
+        let one_row = |ws: &mut Workspace, f: usize, r: usize| {
+            if !wanted(r) {
                 return;
             }
             // SAFETY: row r of work spectrum f and of real field f belong to this item
@@ -443,7 +494,31 @@ impl Transform {
                     combine(f, r, row, rrow);
                 }
             }
-        });
+        };
+        if by_planes {
+            // Plane by plane: the y columns, then the rows, while the plane is in the cache;
+            // a plane none of whose rows is wanted is skipped.
+            let (ny, nz) = (g.ny, g.nz);
+            let blocks = nxh.div_ceil(block(ny));
+            let fy = &*self.fy[1];
+            share_items(&mut self.workspaces[..active], k * nz, |ws, item| {
+                let (f, z) = (item / nz, item % nz);
+                if !(0..ny).any(|y| wanted(z * ny + y)) {
+                    return;
+                }
+                for blk in 0..blocks {
+                    // SAFETY: plane z of work spectrum f belongs to this item only.
+                    unsafe { Self::column_block(ws, fy, (w[f], w[f]), &ycols, z, blk) };
+                }
+                for y in 0..ny {
+                    one_row(ws, f, z * ny + y);
+                }
+            });
+        } else {
+            share_items(&mut self.workspaces[..active], k * rows, |ws, item| {
+                one_row(ws, item / rows, item % rows)
+            });
+        }
     }
 }
 
@@ -630,6 +705,37 @@ mod tests {
                     "field {f}"
                 );
             }
+        }
+    }
+
+    /// 3D inverse transforms plane by plane write exactly the wanted rows, with the bits of
+    /// the full inverse, and skip planes with none; forward by planes = separate passes
+    /// (64 workspaces for 9 planes take the separate passes).
+    #[test]
+    fn planes_keep_the_bits_of_separate_passes() {
+        let g = Grid::new(3, [12, 10, 9]);
+        let a = field(g);
+        let (mut planes, mut passes) = (Transform::new(g, 2), Transform::new(g, 64));
+        assert!(planes.by_planes(1) && !passes.by_planes(1));
+        let mut s = vec![Complex64::default(); g.modes()];
+        let mut s2 = s.clone();
+        planes.forward(&a, &mut s);
+        passes.forward(&a, &mut s2);
+        let bits = |v: &[Complex64]| -> Vec<(u64, u64)> {
+            v.iter().map(|c| (c.re.to_bits(), c.im.to_bits())).collect()
+        };
+        assert_eq!(bits(&s), bits(&s2));
+        let mut full = vec![0.0; g.cells()];
+        passes.inverse(&s, &mut full);
+        // Rows wanted in planes 2 and 5 only.
+        let rows: Vec<bool> = (0..g.rows())
+            .map(|r| matches!(g.row_yz(r), (y, 2) if y % 3 == 0) || g.row_yz(r).1 == 5)
+            .collect();
+        let mut part = vec![7.0; g.cells()];
+        planes.inverse_rows(&[&s], &mut [&mut part], &rows);
+        for (i, (p, f)) in part.iter().zip(&full).enumerate() {
+            let want = if rows[i / g.nx] { *f } else { 7.0 };
+            assert_eq!(p.to_bits(), want.to_bits(), "cell {i}");
         }
     }
 
