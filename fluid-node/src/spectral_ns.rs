@@ -777,47 +777,40 @@ mod tests {
                     assert_eq!(row(part.velocity(c)), want, "{g:?} component {c} row {r}");
                 }
             }
-            // A penalty that reads u* on the flagged rows only.
-            let force = |c: usize, r: usize, u: &[f64], out: &mut [f64]| {
-                if rows[r] {
-                    for (o, v) in out.iter_mut().zip(u) {
-                        *o = 0.2 * (c as f64 + 1.0) - v;
+            // A penalty that reads u* on the rows flagged in `on` only.
+            let penalty = |on: &[bool]| {
+                let on = on.to_vec();
+                move |c: usize, r: usize, u: &[f64], out: &mut [f64]| {
+                    if on[r] {
+                        for (o, v) in out.iter_mut().zip(u) {
+                            *o = 0.2 * (c as f64 + 1.0) - v;
+                        }
+                    } else {
+                        out.fill(0.0);
                     }
-                } else {
-                    out.fill(0.0);
                 }
             };
-            full.add_projected(&[], force);
-            part.add_projected(&rows, force);
-            for c in 0..g.dims {
-                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-                assert_eq!(bits(part.velocity(c)), bits(full.velocity(c)), "{g:?} {c}");
-            }
+            let same_bits = |part: &SpectralNs, full: &SpectralNs, what: &str| {
+                for c in 0..g.dims {
+                    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    let (p, f) = (bits(part.velocity(c)), bits(full.velocity(c)));
+                    assert_eq!(p, f, "{g:?} component {c}, {what}");
+                }
+            };
+            let force = penalty(&rows);
+            full.add_projected(&[], &force);
+            part.add_projected(&rows, &force);
+            same_bits(&part, &full, "penalty on the updated rows");
             // A penalty that reads rows the partial update left behind (a sub-cycled fibre's
             // corrected positions): the solver brings them up to date before it reads them.
             let (mut full, mut part) = (start(), start());
             let reads: Vec<bool> = (0..g.rows()).map(|r| r % 3 == 1 || r % 4 == 0).collect();
             full.advance_intermediate();
             part.advance_intermediate_on(&rows);
-            let force = |c: usize, r: usize, u: &[f64], out: &mut [f64]| {
-                if reads[r] {
-                    for (o, v) in out.iter_mut().zip(u) {
-                        *o = 0.2 * (c as f64 + 1.0) - v;
-                    }
-                } else {
-                    out.fill(0.0);
-                }
-            };
-            full.add_projected(&[], force);
-            part.add_projected(&reads, force);
-            for c in 0..g.dims {
-                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-                assert_eq!(
-                    bits(part.velocity(c)),
-                    bits(full.velocity(c)),
-                    "{g:?} {c} reads"
-                );
-            }
+            let force = penalty(&reads);
+            full.add_projected(&[], &force);
+            part.add_projected(&reads, &force);
+            same_bits(&part, &full, "penalty on rows left behind");
         }
     }
 
