@@ -42,9 +42,8 @@ pub struct SpectralNs {
     /// Real velocity components (the inverse transform of `u_hat`, except on `stale` rows).
     u: Vec<Vec<f64>>,
     /// Rows (`z * ny + y`) of `u` that still hold uⁿ after [`SpectralNs::advance_intermediate_on`]
-    /// until [`SpectralNs::add_projected`] rebuilds them; `any_stale` says whether there are any.
+    /// until [`SpectralNs::add_projected`] rebuilds them.
     stale: Vec<bool>,
-    any_stale: bool,
     /// Scratch flags: the stale rows a penalty reads.
     missing: Vec<bool>,
     /// Spectral velocity components (the state).
@@ -99,7 +98,6 @@ impl SpectralNs {
             decay,
             u: vec![vec![0.0; grid.cells()]; d],
             stale: vec![false; grid.rows()],
-            any_stale: false,
             missing: vec![false; grid.rows()],
             u_hat: vec![vec![Complex64::default(); grid.modes()]; d],
             nl_hat: vec![vec![Complex64::default(); grid.modes()]; if d == 2 { 3 } else { d }],
@@ -219,7 +217,6 @@ impl SpectralNs {
     fn sync_real(&mut self) {
         Self::sync_rows(&mut self.transform, &self.u_hat, &mut self.u, &[]);
         self.stale.fill(false);
-        self.any_stale = false;
     }
 
     /// Real field := inverse transform of the spectral state, on the rows flagged in `rows`
@@ -409,10 +406,9 @@ impl SpectralNs {
             }
         });
         Self::sync_rows(&mut self.transform, &self.u_hat, &mut self.u, rows);
-        for (s, &on) in self.stale.iter_mut().zip(rows) {
-            *s = !on;
+        for (r, s) in self.stale.iter_mut().enumerate() {
+            *s = !rows.get(r).copied().unwrap_or(true);
         }
-        self.any_stale = rows.iter().any(|&on| !on);
     }
 
     /// `û += P f̂` with `f` given component by component in real space (L2020 eqs. 37–38:
@@ -431,15 +427,13 @@ impl SpectralNs {
         reads: &[bool],
         force: impl Fn(usize, usize, &[f64], &mut [f64]) + Sync,
     ) {
-        if self.any_stale {
-            let mut missing = false;
-            for (r, m) in self.missing.iter_mut().enumerate() {
-                *m = self.stale[r] && reads.get(r).copied().unwrap_or(reads.is_empty());
-                missing |= *m;
-            }
-            if missing {
-                Self::sync_rows(&mut self.transform, &self.u_hat, &mut self.u, &self.missing);
-            }
+        let mut missing = false;
+        for (r, m) in self.missing.iter_mut().enumerate() {
+            *m = self.stale[r] && reads.get(r).copied().unwrap_or(true);
+            missing |= *m;
+        }
+        if missing {
+            Self::sync_rows(&mut self.transform, &self.u_hat, &mut self.u, &self.missing);
         }
         let g = self.grid;
         let d = g.dims;
