@@ -280,7 +280,8 @@ impl FluidComponent {
     }
 
     /// Real velocity components, x fastest ([`Grid::index`]); empty before `configure`.
-    /// Between the two phases of a step this is u*.
+    /// Between the two phases of an SPM step with solids it is u* only on the solids' rows
+    /// (the others still hold u^n; see `SpectralNs::velocity`).
     pub fn velocity(&self) -> &[Vec<f64>] {
         self.run
             .as_ref()
