@@ -191,6 +191,13 @@ impl IpcError {
             message: format!("{e:?}"),
         }
     }
+
+    /// [`IpcError::iox`] with the action formed only on failure: for calls made every step.
+    pub(crate) fn iox_with<E: std::fmt::Debug>(
+        action: impl FnOnce() -> String,
+    ) -> impl FnOnce(E) -> Self {
+        move |e| IpcError::iox(action())(e)
+    }
 }
 
 /// iceoryx2's defaults (`/tmp/iceoryx2`, `/dev/shm/iox2_*`), the same in every process of a

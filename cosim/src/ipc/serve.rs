@@ -157,14 +157,16 @@ impl Peers {
             let notifier = event_service(node, &names.wake)?
                 .notifier_builder()
                 .create()
-                .map_err(|e| IpcError::iox(format!("create a wake notifier for node {name}"))(e))?;
+                .map_err(IpcError::iox_with(|| {
+                    format!("create a wake notifier for node {name}")
+                }))?;
             self.0.push((name.to_string(), notifier));
         }
         let (_, notifier) = self.0.iter().find(|(n, _)| n == name).expect("just made");
         notifier
             .notify()
             .map(drop)
-            .map_err(|e| IpcError::iox(format!("wake node {name}"))(e))
+            .map_err(IpcError::iox_with(|| format!("wake node {name}")))
     }
 }
 
@@ -266,7 +268,7 @@ impl Batch<'_> {
     ) -> Result<Option<Request>, IpcError> {
         let Awaited { port, step } = awaited;
         // The message is formed only on failure: this runs every step.
-        let lost = |e| IpcError::iox(format!("read port {}", port.name()))(e);
+        let lost = |e| IpcError::iox_with(|| format!("read port {}", port.name()))(e);
         if !self.poller.skips_polling(kind) {
             let fresh = || exchange.has_fresh(port, step).map(|f| f.then_some(()));
             if self.poller.poll(fresh).map_err(lost)?.is_some() {
