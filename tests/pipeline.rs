@@ -286,3 +286,34 @@ fn a_node_alone_runs_in_batches_to_the_same_bits() {
     assert_eq!(ta.len(), 8);
     assert_eq!(ta, tb, "diagnostics differ");
 }
+
+/// A run whose metrics follow the bead states every step (the built-in example's orbit) runs
+/// in batches too: the coordinator reads each step's states from its queue after the batch.
+/// The orbit, step by step, is the in-process run's to the bit.
+#[test]
+fn orbit_metrics_read_every_step_of_a_batch() {
+    let cfg = config("spm/tumbling.toml");
+    let o = [
+        "time.steps=300",
+        "output.interval=150",
+        "output.fields_interval=0",
+    ]
+    .map(String::from)
+    .to_vec();
+    let run = |name: &str, extra: &[&str]| {
+        run_scene(name, &cfg, &o, extra).unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let processes = run("pipeline-orbit-processes", &[]);
+    let in_process = run("pipeline-orbit-in-process", &["--in-process"]);
+    let summary = |dir: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+    };
+    let (a, b) = (summary(&processes), summary(&in_process));
+    assert!(a["largest_batch_steps"].as_u64().unwrap() > 1, "{a}");
+    assert_eq!(a["metrics"], b["metrics"]);
+    let orbit = |dir: &std::path::Path| std::fs::read_to_string(dir.join("orbit.csv")).unwrap();
+    let (oa, ob) = (orbit(&processes), orbit(&in_process));
+    // A header and one row a step from step 0.
+    assert_eq!(oa.lines().count(), 302);
+    assert_eq!(oa, ob);
+}

@@ -635,8 +635,7 @@ fn drive(
                 // Several steps in one batch where the coordinator needs nothing in between;
                 // a single step may send the next one early (then that one is single too),
                 // unless the next is to be a batch of several.
-                let single =
-                    track || rests || INTERRUPTED.load(Ordering::SeqCst) || !b.can_hold_steps();
+                let single = rests || INTERRUPTED.load(Ordering::SeqCst) || !b.can_hold_steps();
                 let steps_from = |s| {
                     if single {
                         1
@@ -821,6 +820,9 @@ fn drive(
 const BATCH_SECONDS: f64 = 0.05;
 /// Most steps in one batch.
 const MAX_BATCH_STEPS: u64 = 64;
+// The bead states of every step of a batch wait in the coordinator's queue until it reads
+// them (orbit metrics), with one more step sent early.
+const _: () = assert!(MAX_BATCH_STEPS + 2 <= cosim::ipc::STATES_QUEUE as u64);
 
 /// How many steps from `step` the nodes may run in one batch ([`pipeline::Batches::run_steps`]):
 /// up to the next step whose end the coordinator logs (`interval`) or checkpoints or

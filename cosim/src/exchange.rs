@@ -94,8 +94,11 @@ pub trait Exchange {
     ) -> Result<ExchangeHeader, ExchangeError>;
     /// The publication of step `step` on `port`, even if a newer one has arrived since: the
     /// coordinator reads the bead states of a step while the nodes may already be on the
-    /// next one (pipelined runs). A transport keeps one publication beyond the one asked for;
-    /// older ones are gone. The default reads the latest and checks its step.
+    /// next ones (pipelined runs, batches of steps). Reading by step in increasing order
+    /// sees every publication a transport holds: those older than the one asked for are gone
+    /// after the read, later ones stay (between processes, up to
+    /// [`crate::ipc::STATES_QUEUE`] on `bead-states`). The default reads the latest and
+    /// checks its step.
     fn read_states_of_step(
         &mut self,
         port: Port,

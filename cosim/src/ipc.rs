@@ -45,7 +45,7 @@ mod node_main;
 mod serve;
 
 pub use client::{LinkError, NodeClient};
-pub use exchange::IpcExchange;
+pub use exchange::{IpcExchange, STATES_QUEUE};
 pub use node_main::node_main;
 pub use serve::serve;
 

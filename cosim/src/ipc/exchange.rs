@@ -18,6 +18,12 @@ type Svc = ipc::Service;
 /// How long a new reader waits for a serving publisher to hand over its latest publication.
 const HISTORY_WAIT: Duration = Duration::from_secs(2);
 
+/// Publications on `bead-states` a subscriber holds until it reads them: the coordinator
+/// reads every step's bead states (orbit metrics) after a batch of up to this many steps
+/// less two ([`crate::Exchange::read_states_of_step`]); the fibre node publishes them once a
+/// step. Beyond that the oldest are dropped, and a read by step says which step it found.
+pub const STATES_QUEUE: usize = 72;
+
 /// One (port, record type): its service and this participant's ports on it, made on first use.
 struct Lane<T: Record> {
     service: PubSub<Svc, [T], ExchangeHeader>,
@@ -200,7 +206,11 @@ impl IpcExchange {
                 .publish_subscribe::<[T]>()
                 .user_header::<ExchangeHeader>()
                 .history_size(1)
-                .subscriber_max_buffer_size(2)
+                .subscriber_max_buffer_size(if port == Port::BeadStates {
+                    STATES_QUEUE
+                } else {
+                    2
+                })
                 .subscriber_max_borrowed_samples(3)
                 .enable_safe_overflow(true)
                 .max_publishers(2)
