@@ -37,10 +37,6 @@ fn straight_and_resumed(
     (straight, resumed)
 }
 
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
-}
-
 /// The same bits at the end: the last logged bead states, the final diagnostics (fluid and
 /// fibre) and the metrics, which need the history from before the checkpoint too.
 fn assert_same_end(a: &Path, b: &Path) {

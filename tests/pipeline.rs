@@ -57,25 +57,13 @@ fn pipelined_lock_step_and_in_process_runs_give_the_same_bits() {
     let pipelined = run("pipeline-pipelined", &[]);
     let lock_step = run("pipeline-lock-step", &["--lock-step"]);
     let in_process = run("pipeline-in-process", &["--in-process"]);
-    let pipelined_flag = |dir: &std::path::Path| {
-        let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
-        serde_json::from_str::<serde_json::Value>(&text).unwrap()["pipelined"].clone()
-    };
-    assert_eq!(pipelined_flag(&pipelined), true);
+    assert_eq!(summary(&pipelined)["pipelined"], true);
     // Between the outputs (every 5 steps) the nodes run several steps per batch.
-    let largest_batch = |dir: &std::path::Path| {
-        let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
-        serde_json::from_str::<serde_json::Value>(&text).unwrap()["largest_batch_steps"]
-            .as_u64()
-            .unwrap()
-    };
+    let largest_batch =
+        |dir: &std::path::Path| summary(dir)["largest_batch_steps"].as_u64().unwrap();
     assert!((2..=5).contains(&largest_batch(&pipelined)));
     assert_eq!(largest_batch(&lock_step), 0);
-    let waits = |dir: &std::path::Path| {
-        let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
-        serde_json::from_str::<serde_json::Value>(&text).unwrap()["seconds_waiting_for_input"]
-            .clone()
-    };
+    let waits = |dir: &std::path::Path| summary(dir)["seconds_waiting_for_input"].clone();
     // The phases that read the other node's output waited (or checked) for it; the others
     // and a lock-step run report nothing.
     let w = waits(&pipelined);
@@ -88,8 +76,8 @@ fn pipelined_lock_step_and_in_process_runs_give_the_same_bits() {
     }
     assert_eq!(w["fluid-phase-field"].as_f64(), Some(0.0), "{w}");
     assert_eq!(waits(&lock_step), serde_json::json!({}));
-    assert_eq!(pipelined_flag(&lock_step), false);
-    assert_eq!(pipelined_flag(&in_process), false);
+    assert_eq!(summary(&lock_step)["pipelined"], false);
+    assert_eq!(summary(&in_process)["pipelined"], false);
     same_run(&pipelined, &lock_step, "pipelined against lock-step");
     same_run(&pipelined, &in_process, "pipelined against in-process");
     let states = read_topic(&pipelined.join("run.mcap"), "/fibre/bead_states").unwrap();
@@ -133,9 +121,7 @@ fn faulty_run(
     let took = t0.elapsed();
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    let summary =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    (err, summary, took)
+    (err, summary(&out), took)
 }
 
 /// The fibre node refuses its second phase; the fluid node is then waiting for the bead
@@ -222,19 +208,17 @@ fn an_interrupted_pipelined_run_resumes_to_the_same_bits() {
     // Interrupt once the run is under way (its first outputs are logged).
     let out = interrupt_when_logged(child, &stopped, 5_000);
     let err = String::from_utf8_lossy(&out.stderr);
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(stopped.join("summary.json")).unwrap())
-            .unwrap();
-    let steps = summary["steps"].as_u64().unwrap();
+    let stopped_summary = summary(&stopped);
+    let steps = stopped_summary["steps"].as_u64().unwrap();
     eprintln!("stopped at step {steps}: {err}");
-    if summary["status"] != "interrupted" {
+    if stopped_summary["status"] != "interrupted" {
         // The run finished before the signal came; nothing to resume.
-        assert_eq!(summary["status"], "completed", "{err}");
+        assert_eq!(stopped_summary["status"], "completed", "{err}");
         return;
     }
     assert!(steps < 3000);
     // Stopped after a step that reported in full, logged last.
-    assert_full(&summary["final_diagnostics"]);
+    assert_full(&stopped_summary["final_diagnostics"]);
     let logged = read_topic(&stopped.join("run.mcap"), "/diagnostics").unwrap();
     let last_logged = logged.last().unwrap();
     assert_eq!(last_logged["step"].as_u64(), Some(steps));
@@ -253,10 +237,7 @@ fn an_interrupted_pipelined_run_resumes_to_the_same_bits() {
         s.last().unwrap().clone()
     };
     assert_eq!(last(&resumed), last(&straight));
-    let diag = |dir: &std::path::Path| {
-        let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
-        serde_json::from_str::<serde_json::Value>(&text).unwrap()["final_diagnostics"].clone()
-    };
+    let diag = |dir: &std::path::Path| summary(dir)["final_diagnostics"].clone();
     assert_eq!(diag(&resumed), diag(&straight));
 }
 
@@ -273,10 +254,6 @@ fn a_node_alone_runs_in_batches_to_the_same_bits() {
     };
     let alone = run("pipeline-alone", &[]);
     let in_process = run("pipeline-alone-in-process", &["--in-process"]);
-    let summary = |dir: &std::path::Path| {
-        let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
-        serde_json::from_str::<serde_json::Value>(&text).unwrap()
-    };
     let (a, b) = (summary(&alone), summary(&in_process));
     assert_eq!(a["pipelined"], true);
     assert!(a["largest_batch_steps"].as_u64().unwrap() > 1, "{a}");
@@ -305,9 +282,6 @@ fn orbit_metrics_read_every_step_of_a_batch() {
     };
     let processes = run("pipeline-orbit-processes", &[]);
     let in_process = run("pipeline-orbit-in-process", &["--in-process"]);
-    let summary = |dir: &std::path::Path| -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
-    };
     let (a, b) = (summary(&processes), summary(&in_process));
     assert!(a["largest_batch_steps"].as_u64().unwrap() > 1, "{a}");
     assert_eq!(a["metrics"], b["metrics"]);

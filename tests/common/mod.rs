@@ -14,6 +14,11 @@ pub fn config(name: &str) -> PathBuf {
     root().join("configs").join(name)
 }
 
+/// The `summary.json` a run wrote into `dir`.
+pub fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
 /// The output directory of one test in this test process (see [`out_dir`]).
 pub fn run_dir(test: &str) -> PathBuf {
     root()
