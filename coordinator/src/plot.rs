@@ -125,8 +125,8 @@ pub fn error_against_time(
         y0 = y0.min(p.error.max(floor));
         y1 = y1.max(p.error.max(floor));
     }
-    let (x0, x1) = (x0 / 1.5, x1 * 4.0);
-    let (y0, y1) = (y0 / 3.0, y1 * 3.0);
+    let (x0, x1) = with_a_decade(x0 / 1.5, x1 * 4.0);
+    let (y0, y1) = with_a_decade(y0 / 3.0, y1 * 3.0);
     let e = |e: DrawingAreaErrorKind<_>| format!("plotting {}: {e:?}", path.display());
     let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(e)?;
@@ -204,12 +204,26 @@ fn class_colour(class: &str, others: &mut Vec<String>) -> RGBColor {
     }
 }
 
+/// A logarithmic axis range `lo..hi` (both positive) widened to the powers of ten around it
+/// if it holds none: a log axis is labelled at powers of ten only, so a range such as
+/// 1.1..6.5 (every run of a study costing the same) would carry no label at all.
+fn with_a_decade(lo: f64, hi: f64) -> (f64, f64) {
+    let below = 10f64.powf(lo.log10().floor());
+    let above = 10f64.powf(hi.log10().ceil());
+    let holds_one = 10f64.powf(lo.log10().ceil()) <= hi;
+    if holds_one || !(lo > 0.0 && hi.is_finite()) {
+        (lo, hi)
+    } else {
+        (below, above)
+    }
+}
+
 /// An axis range around `values` with a margin: a factor 3 on a logarithmic axis, a tenth
 /// of the span on a linear one (half the value, or 1, for a single value).
 fn axis_range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     let (lo, hi) = values.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
     if log {
-        (lo / 3.0, hi * 3.0)
+        with_a_decade(lo / 3.0, hi * 3.0)
     } else {
         let pad = if hi > lo {
             0.1 * (hi - lo)
@@ -576,4 +590,24 @@ pub fn metric_against(
     });
     root.present().map_err(e)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::with_a_decade;
+
+    fn close(a: (f64, f64), b: (f64, f64)) -> bool {
+        (a.0 / b.0 - 1.0).abs() < 1e-12 && (a.1 / b.1 - 1.0).abs() < 1e-12
+    }
+
+    #[test]
+    fn log_ranges_hold_a_power_of_ten() {
+        // Every run of a study costing the same: 1.07..6.5 s holds no power of ten.
+        assert!(close(with_a_decade(1.07, 6.5), (1.0, 10.0)));
+        assert!(close(with_a_decade(0.02, 0.09), (0.01, 0.1)));
+        // Ranges that hold one are left alone.
+        assert_eq!(with_a_decade(0.5, 20.0), (0.5, 20.0));
+        assert_eq!(with_a_decade(1.0, 3.0), (1.0, 3.0));
+        assert_eq!(with_a_decade(2e-3, 0.7), (2e-3, 0.7));
+    }
 }
