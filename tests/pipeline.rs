@@ -8,6 +8,12 @@ use common::*;
 use coordinator::mcap_log::read_topic;
 use std::time::{Duration, Instant};
 
+/// [`run_scene`] that must succeed: the run's output directory, or a panic with the run's
+/// name and the coordinator's standard error.
+fn run_ok(name: &str, cfg: &std::path::Path, o: &[String], extra: &[&str]) -> std::path::PathBuf {
+    run_scene(name, cfg, o, extra).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
 /// A small binary-fluid scene with a fibre: all five SPM phases, including the phase field
 /// that runs while the fibre node advances the positions.
 fn small_capillary() -> Vec<String> {
@@ -51,12 +57,9 @@ fn assert_full(diagnostics: &serde_json::Value) {
 fn pipelined_lock_step_and_in_process_runs_give_the_same_bits() {
     let cfg = config("capillary/tumbling_2d.toml");
     let o = small_capillary();
-    let run = |name: &str, extra: &[&str]| {
-        run_scene(name, &cfg, &o, extra).unwrap_or_else(|e| panic!("{name}: {e}"))
-    };
-    let pipelined = run("pipeline-pipelined", &[]);
-    let lock_step = run("pipeline-lock-step", &["--lock-step"]);
-    let in_process = run("pipeline-in-process", &["--in-process"]);
+    let pipelined = run_ok("pipeline-pipelined", &cfg, &o, &[]);
+    let lock_step = run_ok("pipeline-lock-step", &cfg, &o, &["--lock-step"]);
+    let in_process = run_ok("pipeline-in-process", &cfg, &o, &["--in-process"]);
     assert_eq!(summary(&pipelined)["pipelined"], true);
     // Between the outputs (every 5 steps) the nodes run several steps per batch.
     let largest_batch =
@@ -249,11 +252,8 @@ fn a_node_alone_runs_in_batches_to_the_same_bits() {
     let o: Vec<String> = ["time.steps=400", "output.interval=50"]
         .map(String::from)
         .to_vec();
-    let run = |name: &str, extra: &[&str]| {
-        run_scene(name, &cfg, &o, extra).unwrap_or_else(|e| panic!("{name}: {e}"))
-    };
-    let alone = run("pipeline-alone", &[]);
-    let in_process = run("pipeline-alone-in-process", &["--in-process"]);
+    let alone = run_ok("pipeline-alone", &cfg, &o, &[]);
+    let in_process = run_ok("pipeline-alone-in-process", &cfg, &o, &["--in-process"]);
     let (a, b) = (summary(&alone), summary(&in_process));
     assert_eq!(a["pipelined"], true);
     assert!(a["largest_batch_steps"].as_u64().unwrap() > 1, "{a}");
@@ -277,11 +277,8 @@ fn orbit_metrics_read_every_step_of_a_batch() {
     ]
     .map(String::from)
     .to_vec();
-    let run = |name: &str, extra: &[&str]| {
-        run_scene(name, &cfg, &o, extra).unwrap_or_else(|e| panic!("{name}: {e}"))
-    };
-    let processes = run("pipeline-orbit-processes", &[]);
-    let in_process = run("pipeline-orbit-in-process", &["--in-process"]);
+    let processes = run_ok("pipeline-orbit-processes", &cfg, &o, &[]);
+    let in_process = run_ok("pipeline-orbit-in-process", &cfg, &o, &["--in-process"]);
     let (a, b) = (summary(&processes), summary(&in_process));
     assert!(a["largest_batch_steps"].as_u64().unwrap() > 1, "{a}");
     assert_eq!(a["metrics"], b["metrics"]);
