@@ -238,7 +238,7 @@ fn chord_shape(dir: &std::path::Path) -> Vec<(f64, f64)> {
 }
 
 /// Buckling in the compressional quadrant (the snaking of L2020 Fig. 6), seeded: a 10-bead
-/// fibre (flexible_shear.toml: r_b = 6, 180^2, gamma = 1.33e-4) starts 0.6 deg off the
+/// fibre (flexible_shear.toml: r_b = 6, 180^2, gamma = 1.389e-4) starts 0.6 deg off the
 /// compressional axis with an S-shaped offset of 0.5 grid spacings (`fibre.0.initial_bend`)
 /// and turns through the quadrant (12 000 steps). Reference: slender-body theory puts the
 /// onset of buckling in shear at eta gamma L^4 / (E I) of order 300 (Becker & Shelley 2001).
