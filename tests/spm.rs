@@ -181,7 +181,7 @@ fn stiff_fibre_in_shear_without_internal_damping_stays_bounded() {
 /// The same undamped chain with the implicit exchange (`fibre.0.exchange = "implicit"`,
 /// fibre-node/src/fibre.rs): the fluid's drag acts on the bead velocities it produces, so it
 /// damps the vibration instead of feeding it. Measured: largest elastic energy 1.39e-4 over
-/// the first half, 1.33e-4 over the second (with damping instead: 1.39e-4, 1.36e-4).
+/// the first half, 1.36e-4 over the second (with damping instead: 1.39e-4, 1.33e-4).
 #[test]
 fn stiff_fibre_with_the_implicit_exchange_stays_bounded_without_damping() {
     stiff_fibre_run(0.0, "implicit");
