@@ -243,11 +243,11 @@ fn chord_shape(dir: &std::path::Path) -> Vec<(f64, f64)> {
 /// and turns through the quadrant (12 000 steps). Reference: slender-body theory puts the
 /// onset of buckling in shear at eta gamma L^4 / (E I) of order 300 (Becker & Shelley 2001).
 /// - Far above it (bead-spring, k_b = 9.6e-4, S2023's K = 1e-3: eta gamma L^4 / (E I) =
-///   2.4e6) the seed grows: measured 0.49 -> 4.45 grid spacings off the chord, end-to-end
+///   2.4e6) the seed grows: measured 0.49 -> 4.46 grid spacings off the chord, end-to-end
 ///   down to 0.984. Tolerance: grows at least 4-fold, end-to-end below 0.99.
 /// - Below it (cohesive beam at L2020's flexible k0 / (L0 eta gamma) = 15e3: 84) the seed
-///   decays: measured 0.014-0.02 off the chord after 3000 steps. Tolerance: under a tenth of
-///   the seed at the end.
+///   decays: measured 0.0198 off the chord at the end (0.014-0.02 from step 3000 on).
+///   Tolerance: under a tenth of the seed at the end.
 ///
 /// So L2020's "flexible" fibre is on the stiff side here and does not snake (the issue's
 /// 15e3 / 75e3 pair is not reproduced; docs/validation/spm.md).

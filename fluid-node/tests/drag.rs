@@ -14,8 +14,8 @@
 //! c = 0.125). Grid units, xi = 1, xi_c = 3, rho = eta = 1.
 //!
 //! The SPM hydrodynamic radius depends on nu dt / xi^2 (REFERENCE.md section 6). Measured
-//! drag / reference for the c = 0.1 cylinder: 1.227 at nu dt / xi^2 = 0.25, 1.066 at 0.5,
-//! 1.023 at 0.6, 0.987 at 0.7, 0.956 at 0.8, 0.904 at 1, 0.739 at 2. The tests run at 0.7.
+//! drag / reference for the c = 0.1 cylinder: 1.227 at nu dt / xi^2 = 0.25, 1.065 at 0.5,
+//! 1.023 at 0.6, 0.987 at 0.7, 0.956 at 0.8, 0.903 at 1, 0.739 at 2. The tests run at 0.7.
 mod common;
 use common::*;
 use cosim::BeadState;
