@@ -233,3 +233,86 @@ fn a_metric_that_cannot_be_computed_does_not_fail_the_run() {
     assert!((0.99..=1.0).contains(&e), "{e}");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// A fibre that starts inside a wall or on top of another fibre is refused at step 0 by the
+/// fluid node (which knows the walls and the box), naming the fibre, the bead and the key,
+/// in either layout and for both fluid methods; the scenes' own starts pass.
+#[test]
+fn a_fibre_starting_in_a_wall_or_on_another_is_refused() {
+    let run = |name: &str, scene: &std::path::Path, sets: &[&str], in_process: bool| {
+        let out = out_dir(&format!("start-{name}"));
+        let mut args = vec![
+            "run",
+            scene.to_str().unwrap(),
+            "--quiet",
+            "--set",
+            "time.steps=2",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        if in_process {
+            args.push("--in-process");
+        }
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        let o = coordinator(&args);
+        let _ = std::fs::remove_dir_all(&out);
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let tumbling = config("spm/tumbling.toml");
+    let in_wall = ["fibre.0.start=[48,2,0]", "output.fields_interval=0"];
+    for in_process in [true, false] {
+        let (ok, err) = run("spm-wall", &tumbling, &in_wall, in_process);
+        assert!(!ok && !err.contains("panicked"), "{err}");
+        assert!(
+            err.contains(
+                "fibre 0 bead 0 starts at y = 2 with radius 4: it reaches into the bottom wall, \
+                 whose face is at y = 3.5"
+            ) && err.contains("move fibre.0.start"),
+            "in-process {in_process}: {err}"
+        );
+    }
+    // 20 beads of diameter 8 upwards from y = 28 cross the top wall of the 96-tall box.
+    let long = ["fibre.0.beads=20", "output.fields_interval=0"];
+    let (_, err) = run("spm-long", &tumbling, &long, true);
+    assert!(
+        err.contains("fibre 0 bead 8 starts at y = 92") && err.contains("top wall"),
+        "{err}"
+    );
+    let fpd = config("fpd/jeffery_rigid.toml");
+    let (_, err) = run("fpd-wall", &fpd, &["fibre.0.start=[32,1,0]"], true);
+    assert!(
+        err.contains(
+            "fibre 0 bead 0 starts at y = 1 with radius 2: it reaches into the bottom wall, \
+             whose face is at y = -0.5"
+        ),
+        "{err}"
+    );
+    // A second fibre whose first bead lies 2 above the first fibre's second bead.
+    let fibre = "[[fibre]]\nmodel = \"cohesive-beam\"\nbeads = 3\nbead_radius = 3.0\n\
+                 youngs_modulus = 1.0\ndensity = 2.0\n";
+    let two = write_scene(
+        "two-fibres",
+        &format!(
+            "dimensions = 2\n[time]\ndt = 0.5\nsteps = 2\n[fluid]\nmethod = \"spm\"\n\
+             grid = [64, 64]\nviscosity = 1.0\n{fibre}start = [20.0, 30.0, 0.0]\n\
+             {fibre}start = [26.0, 32.0, 0.0]\n"
+        ),
+    );
+    let (ok, err) = run("two", &two, &[], true);
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("fibre 1 bead 0 at (26, 32) overlaps fibre 0 bead 1 at (26, 30): centres 2 apart, radii summing to 6"),
+        "{err}"
+    );
+    let (ok, err) = run("two-apart", &two, &["fibre.1.start=[26,36,0]"], true);
+    assert!(ok, "{err}");
+    for (name, scene) in [("spm-ok", &tumbling), ("fpd-ok", &fpd)] {
+        let (ok, err) = run(name, scene, &["output.fields_interval=0"], true);
+        assert!(ok, "{name}: {err}");
+    }
+}

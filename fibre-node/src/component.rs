@@ -366,7 +366,7 @@ impl Component for FibreComponent {
                 };
                 return Err(ComponentError(format!(
                     "time step too large for fibre.{n} (beam stiffness limit): \
-                     time.dt / fibre.{n}.substeps = {} / {} = {h:.6e} exceeds the stable fibre step \
+                     time.dt / fibre.{n}.substeps = {:?} / {} = {h:.6e} exceeds the stable fibre step \
                      {h_ok:.6e} (symplectic Euler, omega_max = {:.6e}, damping {}, 2 % margin); \
                      lower time.dt to at most {:.6e}{advice}",
                     scene.dt, cfg.substeps, lim.omega_max, lim.damping, lim.dt_limit

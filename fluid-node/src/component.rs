@@ -20,6 +20,7 @@ use crate::grid::Grid;
 use crate::spectral_ns::SpectralNs;
 use crate::spm::Spm;
 use crate::stability::{self, CFL_ABORT};
+use crate::start_geometry::{StartBox, StartCheck, WallFaces};
 use crate::walls::Walls;
 use cosim::description::{parameter as param, ModelDescription, PortDescription};
 use cosim::{
@@ -88,6 +89,8 @@ struct Run {
     binary: Option<BinaryFluid>,
     /// The step whose `fluid-phase-field` ran last (binary fluids).
     psi_step: Option<u64>,
+    /// Checks the first bead states of a run from step 0, then `None`.
+    start: Option<StartCheck>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -343,6 +346,12 @@ impl Run {
                 self.states.len(),
                 self.total_beads
             )));
+        }
+        if step == 0 {
+            if let Some(c) = self.start.take() {
+                c.check(&self.states)
+                    .map_err(|e| ComponentError(format!("fluid-node: {e}")))?;
+            }
         }
         self.states_step = None;
         self.spm.place(&self.states).map_err(ComponentError)?;
@@ -653,6 +662,20 @@ impl Component for FluidComponent {
         }
 
         let total_beads = radii.len();
+        let start = StartCheck {
+            geometry: StartBox {
+                dims: grid.dims,
+                size: [grid.nx as f64, grid.ny as f64, grid.nz as f64],
+                periodic: [true, true, grid.dims == 3],
+                walls: spm.walls().map(|w| WallFaces {
+                    bottom: w.faces[0],
+                    top: w.faces[1],
+                    wrap_y: true,
+                }),
+            },
+            beads_per_fibre: cfg.fibres.iter().map(|f| f.beads).collect(),
+            radius: radii,
+        };
         let configured = Configured {
             beads_per_fibre: Vec::new(),
             effects: active,
@@ -675,6 +698,7 @@ impl Component for FluidComponent {
             impulses: vec![BeadImpulse::default(); total_beads],
             binary,
             psi_step: None,
+            start: Some(start),
         });
         Ok(configured)
     }

@@ -14,6 +14,7 @@
 //! y = ny - 1/2 (gap H = ny), otherwise y is periodic.
 use crate::fpd::{FpdConfig, FpdCoupling};
 use crate::mrt_d2q9::{MrtConfig, MrtD2q9, YBoundary};
+use crate::start_geometry::{StartBox, StartCheck, WallFaces};
 use cosim::scene_keys::{self, deserialize_at};
 use cosim::{BeadForce, BeadState, ComponentError, Configured, Exchange, PhaseReport, Port};
 use serde::Deserialize;
@@ -316,6 +317,8 @@ pub struct FpdRun {
     force2: Vec<[f64; 2]>,
     velocities: Vec<[f64; 2]>,
     out: Vec<BeadState>,
+    /// Checks the first bead states of a run from step 0, then `None`.
+    start: Option<StartCheck>,
 }
 
 impl FpdRun {
@@ -441,7 +444,23 @@ impl FpdRun {
                 scene.mach
             ));
         }
+        // Bounce-back walls lie halfway outside the first and last rows.
+        let start = Some(StartCheck {
+            geometry: StartBox {
+                dims: 2,
+                size: [scene.nx as f64, scene.ny as f64, 1.0],
+                periodic: [true, scene.walls.is_none(), false],
+                walls: scene.walls.map(|_| WallFaces {
+                    bottom: -0.5,
+                    top: scene.ny as f64 - 0.5,
+                    wrap_y: false,
+                }),
+            },
+            beads_per_fibre: scene.beads.clone(),
+            radius: vec![scene.coupling.radius; total_beads],
+        });
         let run = FpdRun {
+            start,
             lattice,
             coupling,
             total_beads,
@@ -560,6 +579,12 @@ impl FpdRun {
                     self.forces.len(),
                     self.total_beads
                 )));
+            }
+            if step == 0 {
+                if let Some(s) = self.start.take() {
+                    s.check(&self.states)
+                        .map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?;
+                }
             }
             for k in 0..self.total_beads {
                 let p = self.states[k].position;

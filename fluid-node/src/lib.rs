@@ -15,6 +15,8 @@
 //! - [`fpd_lbm`]: `fluid.method = "fpd-lbm"`, the FPD phase of the fluid node on the lattice;
 //! - [`mrt_d2q9`]: a standalone MRT lattice Boltzmann D2Q9 solver with per-node viscosity and
 //!   Guo forcing, bounce-back walls (the flow solver of FPD on MRT-LBM, S2023);
+//! - [`start_geometry`]: the beads' first positions checked against the walls, each other
+//!   and the periodic box;
 //! - [`stability`]: time-step limits; [`config`]: the `[fluid]`/`[walls]` part of a scene;
 //! - [`component`]: [`FluidComponent`], the [`cosim::Component`] the executable serves;
 //!   [`field_output`]: its fields as VTK files for ParaView, written between steps.
@@ -34,6 +36,7 @@ pub mod smoothed_profile;
 pub mod spectral_ns;
 pub mod spm;
 pub mod stability;
+pub mod start_geometry;
 pub mod transform;
 pub mod walls;
 
