@@ -124,6 +124,81 @@ fn fpd_refuses_what_it_cannot_carry() {
     );
 }
 
+/// A bead-spring fibre too stiff for the explicit FPD coupling is refused before step 0,
+/// with the stiffness it may have; the stiffest fibre the limit accepts runs bounded. Checked
+/// at r_xi = 1/128, where the limit lies closest under the measured threshold (10 %,
+/// fibre-node/src/stability.rs, `fpd_margin`), and at 1/2, where the margin grows with
+/// r_xi. Without the limit, k_s = 1e4 reaches Mach 26 by step 6.
+#[test]
+fn fpd_stiffness_limit_refuses_too_stiff_and_accepts_what_runs() {
+    let scene = config("fpd/jeffery_rigid.toml");
+    let path = scene.to_str().unwrap();
+    let e = run_scene(
+        "fpd-too-stiff",
+        &scene,
+        &["fibre.0.stretch_stiffness=1e4".into()],
+        &["--in-process"],
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("fibre.0 is too stiff for the explicit FPD coupling")
+            && e.contains("fibre.0.stretch_stiffness (k_s = 1.000000e4) to at most"),
+        "{e}"
+    );
+    // The scene's fibre: k_s = 16, K = 3.3. omega_max^2 is linear in (k_s, K), so scaling
+    // both by dt_limit^2 puts the fibre at the limit.
+    let limit = |r_xi: f64, scale: f64| -> Result<f64, String> {
+        let sets = [
+            format!("fluid.interface_ratio={r_xi}"),
+            format!("fibre.0.stretch_stiffness={}", 16.0 * scale),
+            format!("fibre.0.bending_number={}", 3.3 * scale),
+        ];
+        let mut args = vec!["check", path];
+        for s in &sets {
+            args.extend(["--set", s.as_str()]);
+        }
+        let o = coordinator(&args);
+        if !o.status.success() {
+            return Err(String::from_utf8_lossy(&o.stderr).into_owned());
+        }
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        let line = text
+            .lines()
+            .find(|l| l.contains("FPD fibre stiffness (fibre.0): dt <="))
+            .unwrap_or_else(|| panic!("no FPD stiffness limit in: {text}"));
+        Ok(line.rsplit(' ').next().unwrap().parse().unwrap())
+    };
+    for r_xi in [1.0 / 128.0, 0.5] {
+        let edge = limit(r_xi, 1.0).unwrap().powi(2);
+        let e = limit(r_xi, 1.02 * edge).unwrap_err();
+        assert!(e.contains("too stiff for the explicit FPD coupling"), "{e}");
+        let at = 0.995 * edge;
+        assert!(limit(r_xi, at).unwrap() >= 1.0);
+        let dir = run_scene(
+            &format!("fpd-stiff-edge-{r_xi}"),
+            &scene,
+            &[
+                format!("fluid.interface_ratio={r_xi}"),
+                format!("fibre.0.stretch_stiffness={}", 16.0 * at),
+                format!("fibre.0.bending_number={}", 3.3 * at),
+                "time.steps=6000".into(),
+                "analysis.metrics=[]".into(),
+            ],
+            &["--in-process"],
+        )
+        .unwrap_or_else(|e| panic!("r_xi = {r_xi}, k_s = {}: {e}", 16.0 * at));
+        let s = summary(&dir);
+        let mach = s["final_diagnostics"]["max_mach"].as_f64().unwrap();
+        println!(
+            "r_xi = {r_xi}: k_s up to {:.1}, final Mach {mach:.4}",
+            16.0 * edge
+        );
+        // The walls' own Mach number is 0.087; a growing mode would pass the 0.7 abort.
+        assert!(mach < 0.1, "r_xi = {r_xi}: Mach {mach}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
 /// `fibre.N.bending_number` (S2023 eq. 18) sets k_b in the fibre node; the fluid node,
 /// given that k_b instead, derives the same K from its own shear rate and viscosity.
 #[test]

@@ -24,6 +24,8 @@ use std::f64::consts::{PI, SQRT_2};
 pub const DEFAULT_XI: f64 = 1.0;
 /// Default `fluid.xi_cutoff` in units of `fluid.xi` (L2020: xi = 1, xi_c = 3).
 pub const DEFAULT_CUTOFF_OVER_XI: f64 = 3.0;
+/// Default FPD interface ratio r_xi = xi / d (`fluid.interface_ratio`; S2023's 0.125).
+pub const DEFAULT_FPD_INTERFACE_RATIO: f64 = 0.125;
 
 /// L2020 eq. 25 as a function of the signed distance `s` into the solid (`s = r_b - |x - X|`
 /// for a bead): 1 beyond `cutoff` inside, 0 beyond `cutoff` outside,

@@ -3,8 +3,9 @@ use crate::config::{parse_scene, Coupling, ModelKind, SceneConfig, MAX_SUBSTEPS}
 use crate::fibre::{BeadKinematics, Fibre, Model};
 use crate::quaternion::{from_array, to_array, Vec3};
 use crate::spm_exchange;
-use crate::stability::{stability_limit, SAFETY};
+use crate::stability::{fpd_margin, fpd_stiffness_limit, stability_limit, SAFETY};
 use cosim::description::{parameter as param, ModelDescription, PortDescription};
+use cosim::profile::DEFAULT_FPD_INTERFACE_RATIO;
 use cosim::{
     effects, BeadForce, BeadImpulse, BeadState, Component, ComponentError, Configured, Exchange,
     Phase, PhaseReport, Port,
@@ -352,10 +353,45 @@ impl Component for FibreComponent {
                 let a = cfg.bead_radius;
                 f.hold_under_fpd(scene.fluid_density * std::f64::consts::PI * a * a, scene.dt);
             }
-            let lim = stability_limit(&f, cfg.substeps);
+            // Under FPD the beads have no inertia of their own: the limit is that of the
+            // explicit coupling, with the fluid a bead displaces as its mass.
+            let r_xi = scene
+                .fpd_interface_ratio
+                .unwrap_or(DEFAULT_FPD_INTERFACE_RATIO);
+            let lim = if fpd {
+                fpd_stiffness_limit(&f, scene.fluid_density, cfg.bead_radius, r_xi)
+            } else {
+                stability_limit(&f, cfg.substeps)
+            };
+            if fpd && scene.dt > lim.dt_limit {
+                // omega^2 is linear in (k_s, k_b), so both scaled by this factor fit.
+                let factor = (lim.dt_limit / scene.dt).powi(2);
+                let (k_s, k_b) = match &f.model {
+                    Model::BeadSpring(b) => (b.k_s, b.k_b),
+                    Model::CohesiveBeam(_) => (f64::NAN, f64::NAN),
+                };
+                return Err(ComponentError(format!(
+                    "fibre.{n} is too stiff for the explicit FPD coupling (S2023 section II C): \
+                     with the fluid a bead displaces, rho pi a^2 = {:.6e}, as its inertia, its \
+                     fastest mode has omega_max = {:.6e}, stable for time.dt up to {:.6e} \
+                     ({:.3} x 2 / omega_max at fluid.interface_ratio = {}, a measured bound), \
+                     and the lattice step is {:?}; scale its \
+                     stiffness by at most {factor:.4e}: fibre.{n}.stretch_stiffness (k_s = \
+                     {k_s:.6e}) to at most {:.6e} and its bending (k_b = {k_b:.6e}, or \
+                     fibre.{n}.bending_number) by the same factor, or raise fluid.density",
+                    scene.fluid_density * std::f64::consts::PI * cfg.bead_radius.powi(2),
+                    lim.omega_max,
+                    lim.dt_limit,
+                    fpd_margin(r_xi),
+                    r_xi,
+                    scene.dt,
+                    k_s * factor
+                )));
+            }
+            if fpd && lim.dt_limit.is_finite() {
+                limits.push((format!("FPD fibre stiffness (fibre.{n})"), lim.dt_limit));
+            }
             let h = scene.dt / cfg.substeps as f64;
-            // Under FPD the beads have no inertia of their own: the symplectic limit does not
-            // apply (the fluid node checks what its lattice can carry).
             if !fpd && h > lim.step_limit * SAFETY {
                 let h_ok = lim.step_limit * SAFETY;
                 let need = (scene.dt / h_ok).ceil();

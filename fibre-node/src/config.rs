@@ -5,7 +5,7 @@
 //! Every refusal names the dotted path (`fibre.N.key`), the value and what was expected;
 //! nothing panics on any input.
 use crate::spm_exchange::SmoothedProfile;
-use cosim::profile::{DEFAULT_CUTOFF_OVER_XI, DEFAULT_XI};
+use cosim::profile::{DEFAULT_CUTOFF_OVER_XI, DEFAULT_FPD_INTERFACE_RATIO, DEFAULT_XI};
 use cosim::scene_keys::{
     self, describe_value as describe_toml, deserialize_at as deserialize, positive,
 };
@@ -92,8 +92,11 @@ pub struct SceneConfig {
     /// How the fluid, if any, moves the fibres (from `fluid.method`).
     pub coupling: Coupling,
     /// `fluid.density` (mass / length^dimensions, default 1): sets the gains that hold
-    /// clamped beads under FPD. The fluid node validates it.
+    /// clamped beads under FPD and the FPD stiffness limit. The fluid node validates it.
     pub fluid_density: f64,
+    /// Under FPD: `fluid.interface_ratio` r_xi = xi / d (default 0.125, the fluid node's),
+    /// on which the FPD stiffness limit depends. The fluid node validates it.
+    pub fpd_interface_ratio: Option<f64>,
     /// Under SPM: the beads' smoothed profile (`fluid.xi`, `fluid.xi_cutoff`, with the fluid
     /// node's defaults), which sizes the fluid a bead exchanges momentum with.
     pub spm_profile: Option<SmoothedProfile>,
@@ -247,6 +250,14 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         .and_then(toml_number)
         .filter(|r| r.is_finite() && *r > 0.0)
         .unwrap_or(1.0);
+    let fpd_interface_ratio = (coupling == Coupling::Fpd).then(|| {
+        table
+            .get("fluid")
+            .and_then(|f| f.get("interface_ratio"))
+            .and_then(toml_number)
+            .filter(|r| r.is_finite() && *r > 0.0)
+            .unwrap_or(DEFAULT_FPD_INTERFACE_RATIO)
+    });
     // The fluid node validates these; here they only size the profile's inertia.
     let spm_profile = (coupling == Coupling::Spm).then(|| {
         let key = |k: &str| {
@@ -323,6 +334,7 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         has_fluid,
         coupling,
         fluid_density,
+        fpd_interface_ratio,
         spm_profile,
         fibres,
     })

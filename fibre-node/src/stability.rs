@@ -230,9 +230,88 @@ pub fn stability_limit(fibre: &Fibre, substeps: usize) -> StabilityLimit {
     }
 }
 
+/// The stiffness limit of a bead-spring fibre under FPD (S2023 section II C), about its
+/// initial configuration.
+///
+/// Under FPD a bead has no inertia of its own: its force is spread over its profile as a
+/// force density (S2023 eq. 4) and it moves with the profile-weighted flow (eq. 5), one
+/// lattice step later. At the lattice's shortest time scales the force accelerates the fluid
+/// the bead displaces, so the explicit loop "forces from positions, flow, positions from
+/// flow" behaves like position-first symplectic Euler with the bead's fluid mass
+/// `m = rho pi a^2` (2D): stable while `dt < 2 / ω_max`, with `ω_max` the chain's fastest
+/// mode with `m` as every bead's mass. The real threshold differs from that by a factor that
+/// depends on the interface ratio r_xi = xi / d, measured (fluid viscosity, r_eta, a and
+/// rho did not move it); the limit is [`fpd_margin`]`(r_xi) · 2 / ω_max`, 10 % under the
+/// measured threshold.
+pub fn fpd_stiffness_limit(
+    fibre: &Fibre,
+    fluid_density: f64,
+    bead_radius: f64,
+    interface_ratio: f64,
+) -> StabilityLimit {
+    let mut f = representative(fibre).into_owned();
+    f.mass = fluid_density * std::f64::consts::PI * bead_radius * bead_radius;
+    f.damping = 0.0;
+    f.internal_damping = 0.0;
+    let mut lim = stability_limit(&f, 1);
+    lim.name = "FPD fibre stiffness";
+    lim.dt_limit = lim.step_limit * fpd_margin(interface_ratio);
+    lim
+}
+
+/// The stability thresholds of the FPD coupling measured against r_xi, as fractions of
+/// `2 / ω_max` (bead mass `rho pi a^2`): the lower of the stretching and the bending mode of
+/// a 10-bead fibre, d = 4, bisected over 6000-step runs (docs/validation/fpd.md, "Fibre
+/// stiffness under FPD"; d = 8, 3 beads, rho = 4, eta_f from 0.125 to 2 and r_eta from 25
+/// to 1000 gave the same or higher).
+pub const FPD_MEASURED_THRESHOLDS: [(f64, f64); 7] = [
+    (1.0 / 128.0, 0.719),
+    (1.0 / 32.0, 0.742),
+    (1.0 / 16.0, 0.790),
+    (1.0 / 8.0, 0.859),
+    (3.0 / 16.0, 0.983),
+    (1.0 / 4.0, 1.186),
+    (1.0 / 2.0, 2.191),
+];
+
+/// Safety factor between a measured threshold and the limit [`fpd_margin`] applies.
+pub const FPD_THRESHOLD_MARGIN: f64 = 1.1;
+
+/// The fraction of `2 / ω_max` that [`fpd_stiffness_limit`] accepts at r_xi: the measured
+/// threshold ([`FPD_MEASURED_THRESHOLDS`], linear between the measured r_xi, held beyond
+/// them) over [`FPD_THRESHOLD_MARGIN`].
+pub fn fpd_margin(interface_ratio: f64) -> f64 {
+    let t = &FPD_MEASURED_THRESHOLDS;
+    let threshold = if interface_ratio <= t[0].0 {
+        t[0].1
+    } else if interface_ratio >= t[t.len() - 1].0 {
+        t[t.len() - 1].1
+    } else {
+        let k = t
+            .windows(2)
+            .position(|w| interface_ratio <= w[1].0)
+            .unwrap_or(0);
+        let ((r0, f0), (r1, f1)) = (t[k], t[k + 1]);
+        f0 + (f1 - f0) * (interface_ratio - r0) / (r1 - r0)
+    };
+    threshold / FPD_THRESHOLD_MARGIN
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The margin passes through the measured thresholds over the safety factor, between
+    /// them linearly, and is held beyond them.
+    #[test]
+    fn fpd_margin_follows_the_measured_thresholds() {
+        for (r_xi, threshold) in FPD_MEASURED_THRESHOLDS {
+            assert!((fpd_margin(r_xi) * FPD_THRESHOLD_MARGIN - threshold).abs() < 1e-12);
+        }
+        assert!((fpd_margin(0.09375) - 0.5 * (0.790 + 0.859) / 1.1).abs() < 1e-12);
+        assert_eq!(fpd_margin(1e-6), fpd_margin(1.0 / 128.0));
+        assert_eq!(fpd_margin(4.0), fpd_margin(0.5));
+    }
     use crate::config::parse_scene;
     use nalgebra::DMatrix;
 

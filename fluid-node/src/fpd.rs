@@ -70,7 +70,7 @@ impl FpdConfig {
             radius,
             fluid_viscosity,
             viscosity_ratio: 100.0,
-            interface_ratio: 0.125,
+            interface_ratio: cosim::profile::DEFAULT_FPD_INTERFACE_RATIO,
             cutoff: 5.0,
             background_force: [0.0; 2],
         }
