@@ -234,9 +234,9 @@ fn a_metric_that_cannot_be_computed_does_not_fail_the_run() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
-/// A fibre that starts inside a wall or on top of another fibre is refused at step 0 by the
-/// fluid node (which knows the walls and the box), naming the fibre, the bead and the key,
-/// in either layout and for both fluid methods; the scenes' own starts pass.
+/// A fibre that starts inside a wall or on top of another fibre is refused by `check` and at
+/// step 0 by the fluid node (which knows the walls and the box), naming the fibre, the bead
+/// and the key, in either layout and for both fluid methods; the scenes' own starts pass.
 #[test]
 fn a_fibre_starting_in_a_wall_or_on_another_is_refused() {
     let run = |name: &str, scene: &std::path::Path, sets: &[&str], in_process: bool| {
@@ -276,6 +276,14 @@ fn a_fibre_starting_in_a_wall_or_on_another_is_refused() {
             "in-process {in_process}: {err}"
         );
     }
+    // `check` finds the same without running a step.
+    expect_error(
+        &["check", tumbling.to_str().unwrap(), "--set", in_wall[0]],
+        &[
+            "fibre 0 bead 0 starts at y = 2 with radius 4",
+            "bottom wall",
+        ],
+    );
     // 20 beads of diameter 8 upwards from y = 28 cross the top wall of the 96-tall box.
     let long = ["fibre.0.beads=20", "output.fields_interval=0"];
     let (_, err) = run("spm-long", &tumbling, &long, true);

@@ -115,6 +115,12 @@ pub fn check(scene: &LoadedScene) -> Result<(Plan, Configured, Vec<ModelDescript
     let ex = InProcessExchange::new();
     let mut nodes = start_nodes(&plan, Some(&ex), "check", links::DEFAULT_NODE_TIMEOUT)?;
     let configured = describe_and_configure(scene, &plan, &mut nodes)?;
+    // The beads' start against the fluid's walls and box (a run checks it at step 0).
+    for n in nodes.iter_mut() {
+        n.link
+            .call(&Command::CheckStart)
+            .map_err(|e| fail(format!("the scene was refused: {e}")))?;
+    }
     let descriptions = nodes.iter().map(|n| n.description.clone()).collect();
     Ok((plan, configured, descriptions))
 }

@@ -83,6 +83,14 @@ pub trait Component {
     fn publish_restored(&mut self, _exchange: &mut dyn Exchange) -> Result<(), ComponentError> {
         Ok(())
     }
+
+    /// After [`Component::configure`] of every node: check the initial bead states the
+    /// fibre node published against this component's part of the scene (a fluid's walls
+    /// and box). Asked by `check` only; a run checks the same when it first reads the
+    /// beads. Default: nothing to check.
+    fn check_start(&mut self, _exchange: &mut dyn Exchange) -> Result<(), ComponentError> {
+        Ok(())
+    }
 }
 
 /// Run one command on a component. Returns the reply and whether the serving loop should end.
@@ -136,6 +144,10 @@ pub fn dispatch(
                     .write_fields(step, time, std::path::Path::new(&dir))
                     .map(Reply::Files),
             ),
+            false,
+        ),
+        Command::CheckStart => (
+            as_reply(component.check_start(exchange).map(|()| Reply::Ok)),
             false,
         ),
         Command::Shutdown => (Reply::Ok, true),

@@ -43,6 +43,10 @@ pub enum Command {
     /// Answered by [`Reply::Files`] with the names written, relative to `dir` (none for a
     /// node without fields).
     WriteFields { step: u64, time: f64, dir: String },
+    /// Check the initial bead states (published at configure) against what this node knows
+    /// of the scene, e.g. a fluid's walls and box; answered by `Ok` or an error. `check`
+    /// asks it after configure; a run checks the same when it first reads the beads.
+    CheckStart,
     /// Release resources and end the serving loop.
     Shutdown,
 }

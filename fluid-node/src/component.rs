@@ -736,6 +736,24 @@ impl Component for FluidComponent {
         report
     }
 
+    fn check_start(&mut self, exchange: &mut dyn Exchange) -> Result<(), ComponentError> {
+        let check = match (&self.fpd, &self.run) {
+            (Some(f), _) => f.start_check(),
+            (None, Some(r)) => r.start.as_ref().filter(|_| r.total_beads > 0),
+            (None, None) => {
+                return Err(ComponentError::new("fluid-node: configure must come first"))
+            }
+        };
+        let Some(check) = check else {
+            return Ok(());
+        };
+        let mut states = Vec::new();
+        exchange.read_states(Port::BeadStates, &mut states)?;
+        check
+            .check(&states)
+            .map_err(|e| ComponentError(format!("fluid-node: {e}")))
+    }
+
     fn write_fields(
         &mut self,
         step: u64,

@@ -554,6 +554,11 @@ impl FpdRun {
         self.lattice.set_populations(&f, time).map_err(bad)
     }
 
+    /// The check of the beads' first positions, while it has not run (none without beads).
+    pub fn start_check(&self) -> Option<&StartCheck> {
+        self.start.as_ref().filter(|_| self.total_beads > 0)
+    }
+
     /// Phase `fluid-lattice-step` of step `step`.
     pub fn lattice_step(
         &mut self,
