@@ -661,6 +661,10 @@ impl Component for FluidComponent {
             derived.extend(crate::binary_fluid::derived::numbers(&cfg, b, grid));
         }
 
+        let notes = cfg
+            .binary
+            .as_ref()
+            .map_or_else(Vec::new, crate::binary_fluid::derived::notes);
         let total_beads = radii.len();
         let start = StartCheck {
             geometry: StartBox {
@@ -684,7 +688,7 @@ impl Component for FluidComponent {
                 .map(|l| (l.name.to_string(), l.dt_max))
                 .collect(),
             derived,
-            notes: Vec::new(),
+            notes,
         };
         self.run = Some(Run {
             profile: vec![0.0; grid.ny],
