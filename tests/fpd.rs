@@ -542,3 +542,22 @@ fn held_cylinder_drag_against_dennis_and_chang() {
         "C_D {cd20} vs {reference20}"
     );
 }
+
+/// Lamb's Oseen law for a held cylinder at Re = 0.5 (`configs/fpd/cylinder_lamb.toml`,
+/// d = 4 in a 128 d box): C_D within 5 % of 8 pi / (Re (2.002 - ln Re)) = 18.65, the
+/// tolerance of the Dennis & Chang test above (measured 18.005, -3.5 %, 50 d / U). At Re = 1
+/// Lamb's first-order law is itself 28 % above the second order (12.55 against 9.8), and the
+/// lattice lies between them (docs/validation/fpd.md), so Re = 1 is not asserted.
+#[test]
+fn held_cylinder_drag_against_lamb_at_re_one_half() {
+    let s = run_in_process(&config("fpd/cylinder_lamb.toml"), &[], "fpd-cylinder-lamb");
+    assert!((s["derived"]["fluid.stream.reynolds"].as_f64().unwrap() - 0.5).abs() < 1e-9);
+    let (cd, reference) = metric(&s, "drag_coefficient");
+    let lamb = 8.0 * std::f64::consts::PI / (0.5 * (2.002 - 0.5f64.ln()));
+    assert!((reference - lamb).abs() < 1e-12, "{reference} vs {lamb}");
+    println!("Re 0.5: C_D = {cd:.4} (Lamb {reference:.4})");
+    assert!(
+        (cd / reference - 1.0).abs() < 0.05,
+        "C_D {cd} vs {reference}"
+    );
+}
