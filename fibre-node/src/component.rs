@@ -359,7 +359,15 @@ impl Component for FibreComponent {
                 .fpd_interface_ratio
                 .unwrap_or(DEFAULT_FPD_INTERFACE_RATIO);
             let lim = if fpd {
-                fpd_stiffness_limit(&f, scene.fluid_density, cfg.bead_radius, r_xi)
+                // About the straight chain, on which the thresholds were measured: a bent
+                // start raises omega_max but not the stiffness at which the coupling fails
+                // (measured, docs/validation/fpd.md).
+                let straight_cfg = crate::config::FibreConfig {
+                    initial_bend: 0.0,
+                    ..cfg.clone()
+                };
+                let straight = Fibre::straight(&straight_cfg, scene.dimensions, false);
+                fpd_stiffness_limit(&straight, scene.fluid_density, cfg.bead_radius, r_xi)
             } else {
                 stability_limit(&f, cfg.substeps)
             };

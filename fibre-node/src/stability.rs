@@ -242,7 +242,8 @@ pub fn stability_limit(fibre: &Fibre, substeps: usize) -> StabilityLimit {
 /// mode with `m` as every bead's mass. The real threshold differs from that by a factor that
 /// depends on the interface ratio r_xi = xi / d, measured (fluid viscosity, r_eta, a and
 /// rho did not move it); the limit is [`fpd_margin`]`(r_xi) · 2 / ω_max`, 10 % under the
-/// measured threshold.
+/// measured threshold. `fibre` should be straight: the thresholds were measured on straight
+/// chains, and a bent start fails at the same stiffness though its `ω_max` is higher.
 pub fn fpd_stiffness_limit(
     fibre: &Fibre,
     fluid_density: f64,
