@@ -348,10 +348,11 @@ impl Component for FibreComponent {
                 spm_exchange::check(&format!("fibre.{n}"), r, cfg.density)
                     .map_err(ComponentError)?;
             }
+            // The fluid mass a 2D FPD bead displaces, rho pi a^2: the inertia of the
+            // holding force and of the explicit coupling's limit.
+            let fpd_mass = scene.fluid_density * std::f64::consts::PI * cfg.bead_radius.powi(2);
             if fpd && !cfg.clamp.is_empty() {
-                // The fluid mass a 2D FPD bead displaces, rho pi a^2.
-                let a = cfg.bead_radius;
-                f.hold_under_fpd(scene.fluid_density * std::f64::consts::PI * a * a, scene.dt);
+                f.hold_under_fpd(fpd_mass, scene.dt);
             }
             // Under FPD the beads have no inertia of their own: the limit is that of the
             // explicit coupling, with the fluid a bead displaces as its mass.
@@ -367,7 +368,7 @@ impl Component for FibreComponent {
                     ..cfg.clone()
                 };
                 let straight = Fibre::straight(&straight_cfg, scene.dimensions, false);
-                fpd_stiffness_limit(&straight, scene.fluid_density, cfg.bead_radius, r_xi)
+                fpd_stiffness_limit(&straight, fpd_mass, r_xi)
             } else {
                 stability_limit(&f, cfg.substeps)
             };
@@ -387,7 +388,7 @@ impl Component for FibreComponent {
                      stiffness by at most {factor:.4e}: fibre.{n}.stretch_stiffness (k_s = \
                      {k_s:.6e}) to at most {:.6e} and its bending (k_b = {k_b:.6e}, or \
                      fibre.{n}.bending_number) by the same factor, or raise fluid.density",
-                    scene.fluid_density * std::f64::consts::PI * cfg.bead_radius.powi(2),
+                    fpd_mass,
                     lim.omega_max,
                     lim.dt_limit,
                     fpd_margin(r_xi),

@@ -238,20 +238,15 @@ pub fn stability_limit(fibre: &Fibre, substeps: usize) -> StabilityLimit {
 /// lattice step later. At the lattice's shortest time scales the force accelerates the fluid
 /// the bead displaces, so the explicit loop "forces from positions, flow, positions from
 /// flow" behaves like position-first symplectic Euler with the bead's fluid mass
-/// `m = rho pi a^2` (2D): stable while `dt < 2 / ω_max`, with `ω_max` the chain's fastest
-/// mode with `m` as every bead's mass. The real threshold differs from that by a factor that
+/// `fluid_mass = rho pi a^2` (2D): stable while `dt < 2 / ω_max`, with `ω_max` the chain's
+/// fastest mode with that mass on every bead. The real threshold differs from that by a factor that
 /// depends on the interface ratio r_xi = xi / d, measured (fluid viscosity, r_eta, a and
 /// rho did not move it); the limit is [`fpd_margin`]`(r_xi) · 2 / ω_max`, 10 % under the
 /// measured threshold. `fibre` should be straight: the thresholds were measured on straight
 /// chains, and a bent start fails at the same stiffness though its `ω_max` is higher.
-pub fn fpd_stiffness_limit(
-    fibre: &Fibre,
-    fluid_density: f64,
-    bead_radius: f64,
-    interface_ratio: f64,
-) -> StabilityLimit {
+pub fn fpd_stiffness_limit(fibre: &Fibre, fluid_mass: f64, interface_ratio: f64) -> StabilityLimit {
     let mut f = representative(fibre).into_owned();
-    f.mass = fluid_density * std::f64::consts::PI * bead_radius * bead_radius;
+    f.mass = fluid_mass;
     f.damping = 0.0;
     f.internal_damping = 0.0;
     let mut lim = stability_limit(&f, 1);
