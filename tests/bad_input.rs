@@ -239,29 +239,18 @@ fn a_metric_that_cannot_be_computed_does_not_fail_the_run() {
 /// and the key, in either layout and for both fluid methods; the scenes' own starts pass.
 #[test]
 fn a_fibre_starting_in_a_wall_or_on_another_is_refused() {
+    // `run_scene` with two steps; the output directory is removed afterwards.
     let run = |name: &str, scene: &std::path::Path, sets: &[&str], in_process: bool| {
-        let out = out_dir(&format!("start-{name}"));
-        let mut args = vec![
-            "run",
-            scene.to_str().unwrap(),
-            "--quiet",
-            "--set",
-            "time.steps=2",
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        if in_process {
-            args.push("--in-process");
+        let name = format!("start-{name}");
+        let mut o = vec!["time.steps=2".to_string()];
+        o.extend(sets.iter().map(|s| s.to_string()));
+        let extra: &[&str] = if in_process { &["--in-process"] } else { &[] };
+        let r = run_scene(&name, scene, &o, extra);
+        let _ = out_dir(&name);
+        match r {
+            Ok(_) => (true, String::new()),
+            Err(e) => (false, e),
         }
-        for s in sets {
-            args.extend(["--set", s]);
-        }
-        let o = coordinator(&args);
-        let _ = std::fs::remove_dir_all(&out);
-        (
-            o.status.success(),
-            String::from_utf8_lossy(&o.stderr).into_owned(),
-        )
     };
     let tumbling = config("spm/tumbling.toml");
     let in_wall = ["fibre.0.start=[48,2,0]", "output.fields_interval=0"];
