@@ -561,3 +561,66 @@ fn held_cylinder_drag_against_lamb_at_re_one_half() {
         "C_D {cd} vs {reference}"
     );
 }
+
+/// How fast a bent fibre straightens at rest (`configs/fpd/bending_relaxation.toml`, its
+/// fibre ten times stiffer so that the runs are short): against the fluid's drag alone the
+/// 1/e time would not depend on r_eta once the beads are rigid. Under FPD the neck where two
+/// touching beads' profiles overlap is r_eta times more viscous than the fluid and is
+/// sheared by every bend, so for touching beads the time grows with r_eta (measured: 317 at
+/// r_eta = 100, 1496 at 1000, a ratio of 4.7), while beads 6 grid spacings apart, with no
+/// viscous neck, barely notice r_eta (510 and 587, 1.15). SPM's rigid beads, touching, have
+/// no such neck and straighten faster than FPD's at r_eta = 100 (185).
+/// (docs/validation/fpd.md, "How fast a bent fibre straightens".)
+#[test]
+fn fpd_bending_is_damped_by_the_viscous_neck_between_touching_beads() {
+    let time = |scene: &str, set: &[&str], test: &str| {
+        let mut o: Vec<String> = vec!["fibre.0.bending_stiffness=4.4".into()];
+        o.extend(set.iter().map(|s| s.to_string()));
+        let s = run_in_process(&config(scene), &o, test);
+        let t = s["metrics"]["bend_relaxation_time"]["value"].as_f64();
+        t.unwrap_or_else(|| panic!("{test}: no bend_relaxation_time: {}", s["metric_errors"]))
+    };
+    let fpd = "fpd/bending_relaxation.toml";
+    let touching = ["time.steps=3000"];
+    let t100 = time(
+        fpd,
+        &[touching[0], "fluid.viscosity_ratio=100.0"],
+        "fpd-bend-touch-100",
+    );
+    let t1000 = time(
+        fpd,
+        &[touching[0], "fluid.viscosity_ratio=1000.0"],
+        "fpd-bend-touch-1000",
+    );
+    let apart = ["time.steps=2000", "fibre.0.spacing=14.0"];
+    let g100 = time(
+        fpd,
+        &[apart[0], apart[1], "fluid.viscosity_ratio=100.0"],
+        "fpd-bend-gap-100",
+    );
+    let g1000 = time(
+        fpd,
+        &[apart[0], apart[1], "fluid.viscosity_ratio=1000.0"],
+        "fpd-bend-gap-1000",
+    );
+    let spm = time(
+        "spm/bending_relaxation.toml",
+        &["time.steps=1000"],
+        "spm-bend-touch",
+    );
+    println!("touching: {t100:.1} / {t1000:.1}; apart: {g100:.1} / {g1000:.1}; SPM {spm:.1}");
+    assert!(
+        t1000 / t100 > 3.0,
+        "touching beads: r_eta 1000 / 100 = {}",
+        t1000 / t100
+    );
+    assert!(
+        g1000 / g100 < 1.4,
+        "beads apart: r_eta 1000 / 100 = {}",
+        g1000 / g100
+    );
+    assert!(
+        spm < 0.8 * t100,
+        "SPM {spm} against FPD {t100} at r_eta 100"
+    );
+}

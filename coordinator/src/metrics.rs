@@ -16,6 +16,7 @@ pub const KNOWN: &[&str] = &[
     "drag_coefficient",
     "tumbling_period_gamma",
     "min_end_to_end_over_length",
+    "bend_relaxation_time",
     "orbit",
     "half_turn_period_gamma",
     "effective_aspect_ratio",
@@ -38,7 +39,12 @@ const ORBIT_METRICS: &[&str] = &[
 
 /// Whether metric `name` needs fibre 0's orientation at every step.
 pub fn needs_trajectory(name: &str) -> bool {
-    ["tumbling_period_gamma", "min_end_to_end_over_length"].contains(&name)
+    [
+        "tumbling_period_gamma",
+        "min_end_to_end_over_length",
+        "bend_relaxation_time",
+    ]
+    .contains(&name)
         || ORBIT_METRICS.contains(&name)
 }
 
@@ -348,6 +354,19 @@ pub fn compute(
                     .min_end_to_end_ratio()
                     .ok_or("metric `min_end_to_end_over_length` needs a fibre")?,
             ),
+            "bend_relaxation_time" => {
+                let t = ctx.trajectory;
+                let mut m = plain(
+                    t.bend_relaxation_time()
+                        .map_err(|e| format!("metric `bend_relaxation_time`: {e}"))?,
+                );
+                m.extra.insert("initial_sag".into(), t.sag[0]);
+                m.extra.insert("final_sag".into(), t.sag[t.sag.len() - 1]);
+                m.note = "time for fibre 0's largest bead distance from its end-to-end chord \
+                          to fall to 1/e of its start (scene time units)"
+                    .into();
+                m
+            }
             _ => {
                 beam_names.push(name.clone());
                 continue;

@@ -8,6 +8,10 @@ pub struct Trajectory {
     pub end_to_end: Vec<f64>,
     /// Contour length: the polyline through fibre 0's bead centres.
     pub contour: Vec<f64>,
+    /// Bend: the largest distance of a bead centre of fibre 0 from its end-to-end chord
+    /// (grid spacings). Absent from checkpoints written before it was kept.
+    #[serde(default)]
+    pub sag: Vec<f64>,
     /// A few snapshots of fibre 0's shape: time and bead centres in the x-y plane, for the
     /// orbit plot (`orbit_report`). Absent from checkpoints written before they were kept.
     #[serde(default)]
@@ -43,6 +47,7 @@ impl Trajectory {
             })
             .sum();
         self.contour.push(contour);
+        self.sag.push(sag(&states[..beads]));
     }
 
     /// Keep fibre 0's shape (its first `beads` states) at `time`.
@@ -96,6 +101,42 @@ impl Trajectory {
         (c.len() >= 2).then(|| 2.0 * (c[c.len() - 1] - c[0]) / (c.len() - 1) as f64)
     }
 
+    /// Time for fibre 0's bend ([`Trajectory::sag`]) to fall to 1/e of its initial value:
+    /// the first crossing, interpolated in log(sag) between samples. Err when the fibre
+    /// starts straight, or when the bend has not fallen that far by the end of the run.
+    pub fn bend_relaxation_time(&self) -> Result<f64, String> {
+        if self.sag.len() != self.times.len() || self.sag.is_empty() {
+            return Err("no bend history (a run resumed from a checkpoint written \
+                        before it was kept)"
+                .into());
+        }
+        let (s0, t0) = (self.sag[0], self.times[0]);
+        let e2e0 = self.end_to_end[0];
+        if s0 <= 1e-6 * e2e0 {
+            return Err(format!(
+                "fibre 0 starts straight (bend {s0:.3e}); give it fibre.0.initial_bend"
+            ));
+        }
+        let target = s0 / std::f64::consts::E;
+        for i in 1..self.sag.len() {
+            let (a, b) = (self.sag[i - 1], self.sag[i]);
+            if b <= target {
+                let (ta, tb) = (self.times[i - 1], self.times[i]);
+                // Interpolate log(sag), linear in time for an exponential decay.
+                let s = if b > 0.0 && a > b {
+                    (a.ln() - target.ln()) / (a.ln() - b.ln())
+                } else {
+                    1.0
+                };
+                return Ok(ta + s * (tb - ta) - t0);
+            }
+        }
+        Err(format!(
+            "the bend fell from {s0:.4} to {:.4}, not to 1/e of its start; run longer",
+            self.sag[self.sag.len() - 1]
+        ))
+    }
+
     /// Smallest end-to-end distance over the run, over the initial one.
     pub fn min_end_to_end_ratio(&self) -> Option<f64> {
         let first = *self.end_to_end.first()?;
@@ -107,6 +148,32 @@ impl Trajectory {
                 / first,
         )
     }
+}
+
+/// Largest distance of a bead centre from the line through the two end beads.
+fn sag(states: &[cosim::BeadState]) -> f64 {
+    let (a, b) = (states[0].position, states[states.len() - 1].position);
+    let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if l == 0.0 {
+        return 0.0;
+    }
+    states
+        .iter()
+        .map(|s| {
+            let r = [
+                s.position[0] - a[0],
+                s.position[1] - a[1],
+                s.position[2] - a[2],
+            ];
+            let c = [
+                r[1] * d[2] - r[2] * d[1],
+                r[2] * d[0] - r[0] * d[2],
+                r[0] * d[1] - r[1] * d[0],
+            ];
+            (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() / l
+        })
+        .fold(0.0, f64::max)
 }
 
 #[cfg(test)]
@@ -134,5 +201,35 @@ mod tests {
             "{p}"
         );
         assert!((t.min_end_to_end_ratio().unwrap() - 1.0).abs() < 1e-12);
+        assert!(t
+            .bend_relaxation_time()
+            .unwrap_err()
+            .contains("starts straight"));
+    }
+
+    /// A three-bead fibre whose middle bead decays as exp(-t / tau) off the chord, sampled
+    /// coarsely: the 1/e time comes back exactly (log-linear interpolation), and a run cut
+    /// before it says so.
+    #[test]
+    fn exponential_bend_gives_its_relaxation_time() {
+        let tau = 37.5;
+        let mut t = Trajectory::default();
+        for i in 0..=20 {
+            let time = 5.0 + 7.0 * i as f64;
+            let h = 2.0 * (-(time - 5.0) / tau).exp();
+            let s = [
+                BeadState::at_rest([0.0, 0.0, 0.0]),
+                BeadState::at_rest([1.0, h, 0.0]),
+                BeadState::at_rest([2.0, 0.0, 0.0]),
+            ];
+            t.push(time, &s, 3);
+            if i == 4 {
+                let err = t.bend_relaxation_time().unwrap_err();
+                assert!(err.contains("run longer"), "{err}");
+            }
+        }
+        assert!((t.sag[0] - 2.0).abs() < 1e-12);
+        let got = t.bend_relaxation_time().unwrap();
+        assert!((got - tau).abs() < 1e-9 * tau, "{got}");
     }
 }
