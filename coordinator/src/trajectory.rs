@@ -105,7 +105,10 @@ impl Trajectory {
     /// the first crossing, interpolated in log(sag) between samples. Err when the fibre
     /// starts straight, or when the bend has not fallen that far by the end of the run.
     pub fn bend_relaxation_time(&self) -> Result<f64, String> {
-        if self.sag.len() != self.times.len() || self.sag.is_empty() {
+        if self.times.is_empty() {
+            return Err("needs a fibre of at least 2 beads".into());
+        }
+        if self.sag.len() != self.times.len() {
             return Err("no bend history (a run resumed from a checkpoint written \
                         before it was kept)"
                 .into());
@@ -205,6 +208,8 @@ mod tests {
             .bend_relaxation_time()
             .unwrap_err()
             .contains("starts straight"));
+        let none = Trajectory::default().bend_relaxation_time().unwrap_err();
+        assert!(none.contains("needs a fibre"), "{none}");
     }
 
     /// A three-bead fibre whose middle bead decays as exp(-t / tau) off the chord, sampled
