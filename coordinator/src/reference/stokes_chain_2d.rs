@@ -68,15 +68,32 @@ impl Boundary {
 /// 1; the body's reference point is the origin).
 fn angular_velocity(b: &Boundary, flows: &[[[f64; 2]; 2]]) -> Vec<f64> {
     let rate = 2 * b.x.len() + 2;
-    solve(b, flows).iter().map(|s| s[rate]).collect()
+    solve(b, flows, false).iter().map(|s| s[rate]).collect()
 }
 
 /// The boundary integral solve of the free rigid body bounded by `b` in each flow `u = g x`:
 /// per flow, the single-layer density at every node (x and y interleaved, the force per
-/// length the body exerts on the fluid), then U and Omega.
-fn solve(b: &Boundary, flows: &[[[f64; 2]; 2]]) -> Vec<DVector<f64>> {
+/// length the body exerts on the fluid), then U and Omega. With `spinning`, each closed
+/// curve (a disc) turns freely about its own centre at a rate of its own, free of torque,
+/// while the centres move as one rigid body: a chain of rollers, as beads joined only by
+/// central and bending forces are (the bead-spring model); the rates follow Omega.
+fn solve(b: &Boundary, flows: &[[[f64; 2]; 2]], spinning: bool) -> Vec<DVector<f64>> {
     let n = b.x.len();
-    let size = 2 * n + 3;
+    let curves = b.curve.last().map_or(0, |c| c + 1);
+    let spins = if spinning { curves } else { 0 };
+    let size = 2 * n + 3 + spins;
+    // Centre of each curve: the mean of its nodes (exact for a disc's equal-angle nodes).
+    let mut centre = vec![[0.0f64; 2]; curves];
+    let mut count = vec![0usize; curves];
+    for (x, &c) in b.x.iter().zip(&b.curve) {
+        centre[c][0] += x[0];
+        centre[c][1] += x[1];
+        count[c] += 1;
+    }
+    for (c, k) in centre.iter_mut().zip(&count) {
+        c[0] /= *k as f64;
+        c[1] /= *k as f64;
+    }
     let mut a = DMatrix::<f64>::zeros(size, size);
     let k = 1.0 / (4.0 * PI);
     for i in 0..n {
@@ -115,11 +132,18 @@ fn solve(b: &Boundary, flows: &[[[f64; 2]; 2]]) -> Vec<DVector<f64>> {
                 }
             }
         }
-        // - U - Omega e_z x r
+        // - U - Omega e_z x r (rollers: - Omega e_z x X_c - omega_c e_z x (r - X_c))
         a[(2 * i, 2 * n)] = -1.0;
         a[(2 * i + 1, 2 * n + 1)] = -1.0;
-        a[(2 * i, 2 * n + 2)] = b.x[i][1];
-        a[(2 * i + 1, 2 * n + 2)] = -b.x[i][0];
+        let c = b.curve[i];
+        let arm = if spinning { centre[c] } else { b.x[i] };
+        a[(2 * i, 2 * n + 2)] = arm[1];
+        a[(2 * i + 1, 2 * n + 2)] = -arm[0];
+        if spinning {
+            let r = [b.x[i][0] - centre[c][0], b.x[i][1] - centre[c][1]];
+            a[(2 * i, 2 * n + 3 + c)] = r[1];
+            a[(2 * i + 1, 2 * n + 3 + c)] = -r[0];
+        }
     }
     for j in 0..n {
         let hj = b.h[j];
@@ -127,6 +151,13 @@ fn solve(b: &Boundary, flows: &[[[f64; 2]; 2]]) -> Vec<DVector<f64>> {
         a[(2 * n + 1, 2 * j + 1)] = hj;
         a[(2 * n + 2, 2 * j)] = -b.x[j][1] * hj;
         a[(2 * n + 2, 2 * j + 1)] = b.x[j][0] * hj;
+        if spinning {
+            // No torque on each roller about its own centre.
+            let c = b.curve[j];
+            let r = [b.x[j][0] - centre[c][0], b.x[j][1] - centre[c][1]];
+            a[(2 * n + 3 + c, 2 * j)] = -r[1] * hj;
+            a[(2 * n + 3 + c, 2 * j + 1)] = r[0] * hj;
+        }
     }
     let lu = a.lu();
     flows
@@ -173,13 +204,22 @@ pub fn chain_bretherton_at(beads: usize, m: usize) -> (f64, f64) {
 /// torque-free as a whole, but the load is spread unevenly along it, so its joints carry an
 /// S-shaped moment (odd about the centre), which a flexible chain answers by bending into an
 /// S. Used to ask how that moment grows with the chain's thickness at a fixed length.
-pub fn chain_bending_moments(beads: usize, radius: f64, m: usize) -> (f64, Vec<f64>) {
+///
+/// With `spinning` the discs turn freely about their centres (a chain of rollers, see
+/// [`solve`]), so no disc carries a torque and the joints carry only the moments of the
+/// discs' forces.
+pub fn chain_bending_moments(
+    beads: usize,
+    radius: f64,
+    m: usize,
+    spinning: bool,
+) -> (f64, Vec<f64>) {
     let mut b = Boundary::new();
     let centre = |k: usize| 2.0 * k as f64 - (beads as f64 - 1.0);
     for k in 0..beads {
         b.push_ellipse([centre(k), 0.0], radius, radius, m);
     }
-    let s = &solve(&b, &[E2])[0];
+    let s = &solve(&b, &[E2], spinning)[0];
     let moments = (0..beads.saturating_sub(1))
         .map(|k| {
             let xc = centre(k) + 1.0;
@@ -194,6 +234,49 @@ pub fn chain_bending_moments(beads: usize, radius: f64, m: usize) -> (f64, Vec<f
         })
         .collect();
     (s[2 * b.x.len() + 2], moments)
+}
+
+/// The quasi-static S of a flexible chain under the joint moments `m` of
+/// [`chain_bending_moments`] (discs of radius 1, centres 2 apart, viscosity and strain rate
+/// 1): the largest distance of the beam from the chord through the end discs' centres, over
+/// the length L = 2 N, for a bending rigidity EI = L^3. The curvature M / EI is taken linear
+/// between the joints and zero at the end centres. For a fibre of length L, bending rigidity
+/// EI (per unit depth), in a strain rate E of viscosity mu, the deflection is then this
+/// number times L (mu E L^3 / EI).
+pub fn s_deflection_per_load(m: &[f64]) -> f64 {
+    let beads = m.len() + 1;
+    let length = 2.0 * beads as f64;
+    let ei = length.powi(3);
+    let end = 2.0 * (beads as f64 - 1.0);
+    // Knots of the curvature: the end centres and the joints between them.
+    let mut knots = vec![(0.0, 0.0)];
+    knots.extend(
+        m.iter()
+            .enumerate()
+            .map(|(k, &v)| (2.0 * k as f64 + 1.0, v / ei)),
+    );
+    knots.push((end, 0.0));
+    // w'' = kappa, integrated exactly over each linear piece from w(0) = w'(0) = 0.
+    let (mut w, mut slope) = (0.0, 0.0);
+    let mut samples = vec![(0.0, 0.0)];
+    for pair in knots.windows(2) {
+        let ((s0, k0), (s1, k1)) = (pair[0], pair[1]);
+        let steps = 64;
+        let h = (s1 - s0) / steps as f64;
+        let dk = (k1 - k0) / (s1 - s0);
+        for i in 0..steps {
+            let k = k0 + dk * h * i as f64;
+            w += slope * h + k * h * h / 2.0 + dk * h * h * h / 6.0;
+            slope += k * h + dk * h * h / 2.0;
+            samples.push((s0 + h * (i + 1) as f64, w));
+        }
+    }
+    let w_end = w;
+    samples
+        .iter()
+        .map(|&(s, w)| (w - w_end * s / end).abs())
+        .fold(0.0, f64::max)
+        / length
 }
 
 /// Nodes per disc of [`chain_bretherton`].
@@ -272,7 +355,7 @@ mod tests {
     /// B as the plain solve for touching discs, and converged in the nodes per disc.
     #[test]
     fn chain_moments_are_odd_and_converge() {
-        let (b, m) = chain_bending_moments(6, 1.0, 48);
+        let (b, m) = chain_bending_moments(6, 1.0, 48, false);
         assert!((b - chain_bretherton_at(6, 48).0).abs() < 1e-12);
         assert_eq!(m.len(), 5);
         let scale = m.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -282,8 +365,8 @@ mod tests {
         }
         // Touching discs converge slowly (the cusps at the contacts): the change halves or
         // better with each doubling of the nodes, and is under 0.5 % at 48 -> 96.
-        let (_, coarse) = chain_bending_moments(6, 1.0, 24);
-        let (_, fine) = chain_bending_moments(6, 1.0, 96);
+        let (_, coarse) = chain_bending_moments(6, 1.0, 24, false);
+        let (_, fine) = chain_bending_moments(6, 1.0, 96, false);
         let (d1, d2) = ((m[0] - coarse[0]).abs(), (fine[0] - m[0]).abs());
         eprintln!(
             "M_0 at 24 / 48 / 96 nodes: {} / {} / {}",
@@ -291,5 +374,106 @@ mod tests {
         );
         assert!(d2 < 0.5 * d1, "{d1} then {d2}");
         assert!(d2 < 5e-3 * scale, "{d2} against {scale}");
+    }
+
+    /// Rollers: each disc free of torque about its own centre (to round-off, against the
+    /// torques the locked discs carry), the joints' moments odd about the centre and smaller
+    /// than the locked chain's, and converged in the nodes per disc for discs apart.
+    #[test]
+    fn rollers_carry_no_disc_torque() {
+        let torques = |spinning: bool| {
+            let mut b = Boundary::new();
+            for k in 0..5 {
+                b.push_ellipse([2.0 * k as f64 - 4.0, 0.0], 0.75, 0.75, 48);
+            }
+            let s = &solve(&b, &[E2], spinning)[0];
+            (0..5)
+                .map(|c| {
+                    let xc = 2.0 * c as f64 - 4.0;
+                    (0..b.x.len())
+                        .filter(|&j| b.curve[j] == c)
+                        .map(|j| b.h[j] * ((b.x[j][0] - xc) * s[2 * j + 1] - b.x[j][1] * s[2 * j]))
+                        .sum::<f64>()
+                })
+                .collect::<Vec<f64>>()
+        };
+        let locked = torques(false);
+        let scale = locked.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        assert!(scale > 1e-3, "{locked:?}");
+        for t in torques(true) {
+            assert!(
+                t.abs() < 1e-9 * scale,
+                "a roller carries torque {t} (locked: {scale})"
+            );
+        }
+        let max = |m: &[f64]| m.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let (_, free) = chain_bending_moments(6, 0.75, 48, true);
+        let (_, held) = chain_bending_moments(6, 0.75, 48, false);
+        for k in 0..5 {
+            assert!(
+                (free[k] + free[4 - k]).abs() < 1e-9 * max(&free),
+                "{free:?}"
+            );
+        }
+        assert!(max(&free) < max(&held), "{free:?} against {held:?}");
+        let (_, fine) = chain_bending_moments(6, 0.75, 96, true);
+        assert!(
+            (max(&fine) - max(&free)).abs() < 1e-2 * max(&free),
+            "{free:?} {fine:?}"
+        );
+    }
+
+    /// The S of a beam under a moment odd about its centre: the piecewise exact
+    /// integration against a fine midpoint quadrature of the same curvature (to 1e-6), and
+    /// linear in the moment.
+    #[test]
+    fn s_deflection_matches_a_fine_quadrature() {
+        // Joints of 10 discs at s = 1, 3, ..., 17; the end centres at 0 and 18 (c = 9).
+        let c = 9.0;
+        let m_odd: Vec<f64> = (0..9)
+            .map(|k| {
+                let s = 2.0 * k as f64 + 1.0;
+                (s - c) * s * (2.0 * c - s) / (c * c)
+            })
+            .collect();
+        let got = s_deflection_per_load(&m_odd);
+        // Fine quadrature of the same piecewise-linear curvature.
+        let ei = 20f64.powi(3);
+        let knots: Vec<(f64, f64)> = std::iter::once((0.0, 0.0))
+            .chain(
+                m_odd
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &v)| (2.0 * k as f64 + 1.0, v / ei)),
+            )
+            .chain(std::iter::once((2.0 * c, 0.0)))
+            .collect();
+        let kappa = |s: f64| {
+            let i = knots
+                .iter()
+                .rposition(|&(x, _)| x <= s)
+                .unwrap()
+                .min(knots.len() - 2);
+            let ((x0, k0), (x1, k1)) = (knots[i], knots[i + 1]);
+            k0 + (k1 - k0) * (s - x0) / (x1 - x0)
+        };
+        let n = 200_000;
+        let h = 2.0 * c / n as f64;
+        let (mut w, mut slope, mut ws) = (0.0, 0.0, vec![0.0]);
+        for i in 0..n {
+            let k = kappa((i as f64 + 0.5) * h);
+            w += slope * h + k * h * h / 2.0;
+            slope += k * h;
+            ws.push(w);
+        }
+        let want = ws
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| (v - w * i as f64 / n as f64).abs())
+            .fold(0.0, f64::max)
+            / 20.0;
+        assert!((got - want).abs() < 1e-6 * want, "{got} against {want}");
+        let doubled: Vec<f64> = m_odd.iter().map(|v| 2.0 * v).collect();
+        assert!((s_deflection_per_load(&doubled) - 2.0 * got).abs() < 1e-12 * got);
     }
 }
