@@ -293,3 +293,76 @@ fn a_seeded_fibre_buckles_only_above_the_slender_body_threshold() {
     println!("stiff: off the chord {seed:.3} -> {last:.4} at the end");
     assert!(last < 0.1 * seed, "{last}");
 }
+
+/// S2023's Fig. 7 fibre (K = 3.3) under SPM, started on the compressional axis, at the
+/// output step nearest the vertical (1600 steps, 93 deg): as a cohesive beam, its beads tied
+/// to the beam, it bends as the quasi-static 2D Stokes estimate for a chain of locked discs
+/// says (`stokes_chain_2d::chain_bending_moments` and `s_deflection_per_load`; measured 0.77
+/// of it, the fibre lagging the load), while the bead-spring chain of the same bending
+/// rigidity, whose beads turn freely with the fluid like rollers, bends a tenth as much
+/// (0.07). `check` notes the rollers. (docs/validation/fpd.md, "S2023's Fig. 7 scene with
+/// SPM".)
+#[test]
+fn a_bead_spring_chain_under_spm_bends_like_rollers_and_a_cohesive_beam_as_stokes_says() {
+    use coordinator::reference::stokes_chain_2d as bem;
+    let (_, moments) = bem::chain_bending_moments(10, 1.0, 64, false);
+    let per_load = bem::s_deflection_per_load(&moments);
+    let bend = |scene: &str, test: &str| {
+        let o: Vec<String> = [
+            "time.steps=1600",
+            "output.interval=1600",
+            "fibre.0.start=[125.5,58.5,0.0]",
+            "fibre.0.direction=[-1.0,1.0,0.0]",
+            "analysis.metrics=[]",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        let s = run_in_process(&config(scene), &o, test);
+        let states = read_topic(&run_dir(test).join("run.mcap"), "/fibre/bead_states").unwrap();
+        let p: Vec<(f64, f64)> = states[1]["states"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| (b[0].as_f64().unwrap(), b[1].as_f64().unwrap()))
+            .collect();
+        let ((x0, y0), (x1, y1)) = (p[0], p[p.len() - 1]);
+        let chord = (x1 - x0).hypot(y1 - y0);
+        let sag = p
+            .iter()
+            .map(|&(x, y)| ((x1 - x0) * (y - y0) - (y1 - y0) * (x - x0)).abs() / chord)
+            .fold(0.0, f64::max);
+        // The estimate at this angle: L (mu E L^3 / EI) times the chain's S per unit load,
+        // E = (gamma / 2) |cos 2 theta| the strain rate across the fibre's axis.
+        let d = &s["derived"];
+        let theta = (y1 - y0).atan2(x1 - x0);
+        let e = 0.5 * d["fluid.shear_rate"].as_f64().unwrap().abs() * (2.0 * theta).cos().abs();
+        let (mu, ei, l) = (
+            2.0 / 3.0,
+            d["fibre.0.bending_rigidity"].as_f64().unwrap(),
+            80.0,
+        );
+        let estimate = per_load * l * mu * e * l.powi(3) / ei;
+        println!(
+            "{scene}: theta {:.1} deg, bend {sag:.4}, estimate {estimate:.4}",
+            theta.to_degrees()
+        );
+        sag / estimate
+    };
+    let beam = bend("spm/s2023_fig7_twin_beam.toml", "spm-twin-beam-bend");
+    let rollers = bend("spm/s2023_fig7_twin.toml", "spm-twin-rollers-bend");
+    assert!(
+        (0.6..1.2).contains(&beam),
+        "cohesive beam: {beam} of the Stokes estimate"
+    );
+    assert!(
+        rollers < 0.25,
+        "bead-spring chain: {rollers} of the Stokes estimate"
+    );
+    let notes = |scene: &str| {
+        let out = coordinator(&["check", config(scene).to_str().unwrap()]);
+        String::from_utf8(out.stdout).unwrap()
+    };
+    assert!(notes("spm/s2023_fig7_twin.toml").contains("train of rollers"));
+    assert!(!notes("spm/s2023_fig7_twin_beam.toml").contains("rollers"));
+}

@@ -468,6 +468,26 @@ impl Component for FibreComponent {
             active.push(effects::DAMPING.into());
         }
 
+        // Bead-spring beads feel no torque from their neighbours, so under SPM, where each
+        // bead is a rigid body turning with the fluid, the chain is a train of rollers
+        // (docs/validation/spm.md, "Flexible versus rigid"; fpd.md, "S2023's Fig. 7 scene").
+        let mut notes = Vec::new();
+        if scene.coupling == Coupling::Spm {
+            for (n, f) in fibres.iter().enumerate() {
+                if matches!(f.model, Model::BeadSpring(_)) && f.len() > 2 && f.rotates {
+                    notes.push(format!(
+                        "fibre.{n} (bead-spring under spm): its beads take no torque from each \
+                         other, so each turns freely with the fluid and the chain moves like a \
+                         train of rollers: it turns like a slimmer body and bends far less than \
+                         a solid fibre of the same bending rigidity (2D Stokes: 2-80 times less \
+                         S-shaped moment; on S2023's Fig. 7 scene it sticks where the cohesive \
+                         beam tumbles; docs/validation/spm.md). For a solid fibre, use \
+                         fibre.{n}.model = \"cohesive-beam\""
+                    ));
+                }
+            }
+        }
+
         let total_beads = fibres.iter().map(|f| f.len()).sum();
         let mut run = Run {
             coupling: scene.coupling,
@@ -490,7 +510,7 @@ impl Component for FibreComponent {
             effects: active,
             time_step_limits: limits,
             derived,
-            notes: Vec::new(),
+            notes,
         };
         self.run = Some(run);
         Ok(configured)
