@@ -478,10 +478,11 @@ impl Component for FibreComponent {
                     notes.push(format!(
                         "fibre.{n} (bead-spring under spm): its beads take no torque from each \
                          other, so each turns freely with the fluid and the chain moves like a \
-                         train of rollers: it turns like a slimmer body and bends far less than \
-                         a solid fibre of the same bending rigidity (2D Stokes: 2-80 times less \
-                         S-shaped moment; on S2023's Fig. 7 scene it sticks where the cohesive \
-                         beam tumbles; docs/validation/spm.md). For a solid fibre, use \
+                         train of rollers: it turns like a slimmer body and bends less than a \
+                         solid fibre of the same bending rigidity (2D Stokes: 2-80 times less \
+                         S-shaped moment; on S2023's Fig. 7 scene a tenth as much at the \
+                         vertical, and it sticks where the cohesive beam tumbles; \
+                         docs/validation/spm.md). For a solid fibre, use \
                          fibre.{n}.model = \"cohesive-beam\""
                     ));
                 }
