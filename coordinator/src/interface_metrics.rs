@@ -19,7 +19,9 @@
 //!   (N-6)/2 + 5, the part that bends around the droplet; appendix C does not say which
 //!   six), and R_droplet the equivalent radius of the initial droplet by L2020 eq. 45
 //!   (derived `fluid.binary.initial_droplet_radius`).
-use crate::metrics::{dot, fibre0_bead_radius, lookup, norm, number, plain, sub, Context, Metric};
+use crate::metrics::{
+    chord_sag, cross, dot, fibre0_bead_radius, lookup, norm, number, plain, sub, Context, Metric,
+};
 use std::f64::consts::PI;
 
 /// Metric names this module computes.
@@ -35,14 +37,6 @@ pub const WRAP_NONE_BELOW: f64 = 0.05;
 pub const FIT_BEADS: usize = 6;
 
 type P = [f64; 3];
-
-fn cross(a: P, b: P) -> P {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 
 /// Angle in degrees between the segment `a -> b` and the plane of normal `normal`, in
 /// [0, 90]: asin(|d . n| / (|d| |n|)).
@@ -415,12 +409,7 @@ pub fn interface_metric(name: &str, ctx: &Context) -> Result<Metric, String> {
                     .insert("interface_position_diagnostic".into(), level);
             }
             // Bending: the largest distance of a bead centre from the end-to-end chord.
-            let chord = sub(last, first);
-            let cl = norm(chord);
-            let sag = points
-                .iter()
-                .map(|&p| norm(cross(sub(p, first), chord)) / cl)
-                .fold(0.0f64, f64::max);
+            let sag = chord_sag(first, last, points.iter().copied());
             m.extra.insert("max_sag_over_r_b".into(), sag / r_b);
             m.note = "heights along the interface normal, from fluid.binary.position (the \
                       initial interface)"

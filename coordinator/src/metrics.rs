@@ -215,6 +215,26 @@ pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 pub(crate) fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+/// Largest distance of `points` from the line through `first` and `last` (a fibre's bend
+/// off its end-to-end chord); 0 when the two ends coincide.
+pub(crate) fn chord_sag(
+    first: [f64; 3],
+    last: [f64; 3],
+    points: impl Iterator<Item = [f64; 3]>,
+) -> f64 {
+    let chord = sub(last, first);
+    let cl = norm(chord);
+    points
+        .map(|p| norm(cross(sub(p, first), chord)) / cl)
+        .fold(0.0f64, f64::max)
+}
 fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
     [a[0] * s, a[1] * s, a[2] * s]
 }

@@ -47,7 +47,11 @@ impl Trajectory {
             })
             .sum();
         self.contour.push(contour);
-        self.sag.push(sag(&states[..beads]));
+        self.sag.push(crate::metrics::chord_sag(
+            a,
+            b,
+            states[..beads].iter().map(|s| s.position),
+        ));
     }
 
     /// Keep fibre 0's shape (its first `beads` states) at `time`.
@@ -151,32 +155,6 @@ impl Trajectory {
                 / first,
         )
     }
-}
-
-/// Largest distance of a bead centre from the line through the two end beads.
-fn sag(states: &[cosim::BeadState]) -> f64 {
-    let (a, b) = (states[0].position, states[states.len() - 1].position);
-    let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-    let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-    if l == 0.0 {
-        return 0.0;
-    }
-    states
-        .iter()
-        .map(|s| {
-            let r = [
-                s.position[0] - a[0],
-                s.position[1] - a[1],
-                s.position[2] - a[2],
-            ];
-            let c = [
-                r[1] * d[2] - r[2] * d[1],
-                r[2] * d[0] - r[0] * d[2],
-                r[0] * d[1] - r[1] * d[0],
-            ];
-            (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() / l
-        })
-        .fold(0.0, f64::max)
 }
 
 #[cfg(test)]
