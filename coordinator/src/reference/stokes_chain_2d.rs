@@ -188,12 +188,21 @@ fn bretherton(b: &Boundary) -> (f64, f64) {
 /// Bretherton constant of a straight chain of `beads` touching discs of unit radius, with
 /// `m` nodes per disc, and the turning rate in E1 (zero by symmetry).
 pub fn chain_bretherton_at(beads: usize, m: usize) -> (f64, f64) {
+    bretherton(&chain(beads, 1.0, m))
+}
+
+/// x of disc `k`'s centre in a chain of `beads` discs with centres 2 apart, centred on 0.
+fn chain_centre(beads: usize, k: usize) -> f64 {
+    2.0 * k as f64 - (beads as f64 - 1.0)
+}
+
+/// A straight chain of `beads` discs of `radius` along x, centres 2 apart, `m` nodes each.
+fn chain(beads: usize, radius: f64, m: usize) -> Boundary {
     let mut b = Boundary::new();
     for k in 0..beads {
-        let cx = 2.0 * k as f64 - (beads as f64 - 1.0);
-        b.push_ellipse([cx, 0.0], 1.0, 1.0, m);
+        b.push_ellipse([chain_centre(beads, k), 0.0], radius, radius, m);
     }
-    bretherton(&b)
+    b
 }
 
 /// The bending moment a free, straight, rigid chain of `beads` discs of `radius` (centres 2
@@ -214,15 +223,11 @@ pub fn chain_bending_moments(
     m: usize,
     spinning: bool,
 ) -> (f64, Vec<f64>) {
-    let mut b = Boundary::new();
-    let centre = |k: usize| 2.0 * k as f64 - (beads as f64 - 1.0);
-    for k in 0..beads {
-        b.push_ellipse([centre(k), 0.0], radius, radius, m);
-    }
+    let b = chain(beads, radius, m);
     let s = &solve(&b, &[E2], spinning)[0];
     let moments = (0..beads.saturating_sub(1))
         .map(|k| {
-            let xc = centre(k) + 1.0;
+            let xc = chain_centre(beads, k) + 1.0;
             (0..b.x.len())
                 .filter(|&j| b.curve[j] <= k)
                 .map(|j| {
@@ -382,14 +387,11 @@ mod tests {
     #[test]
     fn rollers_carry_no_disc_torque() {
         let torques = |spinning: bool| {
-            let mut b = Boundary::new();
-            for k in 0..5 {
-                b.push_ellipse([2.0 * k as f64 - 4.0, 0.0], 0.75, 0.75, 48);
-            }
+            let b = chain(5, 0.75, 48);
             let s = &solve(&b, &[E2], spinning)[0];
             (0..5)
                 .map(|c| {
-                    let xc = 2.0 * c as f64 - 4.0;
+                    let xc = chain_centre(5, c);
                     (0..b.x.len())
                         .filter(|&j| b.curve[j] == c)
                         .map(|j| b.h[j] * ((b.x[j][0] - xc) * s[2 * j + 1] - b.x[j][1] * s[2 * j]))
