@@ -337,8 +337,9 @@ fn a_bead_spring_chain_under_spm_bends_like_rollers_and_a_cohesive_beam_as_stoke
         let d = &s["derived"];
         let theta = (y1 - y0).atan2(x1 - x0);
         let e = 0.5 * d["fluid.shear_rate"].as_f64().unwrap().abs() * (2.0 * theta).cos().abs();
+        // Both scenes have fluid density 1, so the dynamic viscosity is the kinematic one.
         let (mu, ei, l) = (
-            2.0 / 3.0,
+            d["fluid.kinematic_viscosity"].as_f64().unwrap(),
             d["fibre.0.bending_rigidity"].as_f64().unwrap(),
             80.0,
         );
