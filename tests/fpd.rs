@@ -361,6 +361,96 @@ fn fpd_orbits_fall_in_s2023_regimes() {
     assert_eq!(run("fpd-orbit-confined", 3.3, 1), "stuck");
 }
 
+/// S2023's groups in place of the keys they set (eq. 18 and section II C;
+/// coordinator/src/shear_groups.rs, fibre-node/src/config.rs): the d = 4 scene of the shape
+/// diagram given as C = 0.5, Re_ps = 1.5, K = 3.3 and K_s = 240 is resolved to the gap
+/// H = l_c / C = 80, eta_f = rho gamma l_c^2 / (4 Re_ps) = 1/3 (gamma = 0.1 / 80, l_c = 40),
+/// k_s = K_s eta_f V0 l0 = 48 eta_f (V0 = 0.05, l0 = 4) and k_b = K eta_f gamma l_c^2 / 2,
+/// which the hand-made rows of `fpd_orbits_fall_in_s2023_regimes` write out; the fluid node
+/// reports back the groups asked for; and the same scene given by those keys runs the same
+/// bits.
+#[test]
+fn s2023_groups_set_the_keys_they_stand_for() {
+    let common = [
+        "fibre.0.bead_radius=2.0",
+        "fibre.0.start=[32.0,39.5,0.0]",
+        "time.steps=1500",
+        "output.interval=500",
+        "analysis.metrics=[]",
+    ];
+    let with = |extra: &[String]| -> Vec<String> {
+        common
+            .iter()
+            .map(|s| s.to_string())
+            .chain(extra.iter().cloned())
+            .collect()
+    };
+    let groups = with(&[
+        "fluid.grid=[100]".into(),
+        "fluid.confinement=0.5".into(),
+        "fluid.particle_shear_reynolds=1.5".into(),
+        "fibre.0.bending_number=3.3".into(),
+        "fibre.0.stretch_number=240".into(),
+    ]);
+    let cfg = config("fpd/flexible_shear.toml");
+    let a = run_in_process(&cfg, &groups, "fpd-groups");
+    let d = &a["derived"];
+    let num = |k: &str| d[k].as_f64().unwrap_or_else(|| panic!("derived {k}: {d}"));
+    let (eta, ks, kb) = (
+        num("fluid.viscosity"),
+        num("fibre.0.stretch_stiffness"),
+        num("fibre.0.bending_stiffness"),
+    );
+    let gamma = 0.1 / 80.0;
+    let close = |x: f64, want: f64| (x - want).abs() <= 1e-12 * want.abs();
+    assert_eq!(num("fluid.gap"), 80.0);
+    assert_eq!(num("fluid.confinement"), 0.5);
+    assert!(close(eta, 1.0 / 3.0), "eta_f = {eta}");
+    assert!(close(ks, 48.0 * eta), "k_s = {ks}");
+    assert!(close(kb, 0.5 * 3.3 * eta * gamma * 1600.0), "k_b = {kb}");
+    assert!(close(num("fluid.particle_shear_reynolds"), 1.5));
+    assert!(close(num("fibre.0.bending_number"), 3.3));
+    assert!(close(num("fibre.0.stretch_number"), 240.0));
+    // Two overrides replaced the scene file's keys; two groups were resolved.
+    let lines: Vec<&str> = a["groups"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l.as_str().unwrap())
+        .collect();
+    assert_eq!(lines.len(), 4, "{lines:?}");
+    assert!(
+        lines[0].contains("replaces the scene's fluid.viscosity"),
+        "{lines:?}"
+    );
+    assert!(
+        lines[1].contains("replaces the scene's fibre.0.stretch_stiffness"),
+        "{lines:?}"
+    );
+    assert!(lines[2].contains("fluid.grid = [100, 80]"), "{lines:?}");
+
+    let by_keys = with(&[
+        "fluid.grid=[100,80]".into(),
+        format!("fluid.viscosity={eta}"),
+        format!("fibre.0.bending_stiffness={kb}"),
+        format!("fibre.0.stretch_stiffness={ks}"),
+    ]);
+    let b = run_in_process(&cfg, &by_keys, "fpd-groups-by-keys");
+    let states =
+        |name: &str| read_topic(&run_dir(name).join("run.mcap"), "/fibre/bead_states").unwrap();
+    let (sa, sb) = (states("fpd-groups"), states("fpd-groups-by-keys"));
+    assert_eq!(sa.len(), 4);
+    assert_eq!(
+        sa, sb,
+        "the scene given by its groups and by its keys ran differently"
+    );
+    // Given k_b, the fluid node works K out on its own as well.
+    let mut db = b["derived"].clone();
+    let k = db.as_object_mut().unwrap().remove("fluid.bending_number");
+    assert!(close(k.and_then(|k| k.as_f64()).unwrap(), 3.3));
+    assert_eq!(a["derived"], db);
+}
+
 /// `orbit.csv` and `orbit.png` (coordinator/src/orbit_report.rs) next to a summary with orbit
 /// metrics: the rows span the run (every sample, or every k-th one and the last), the
 /// end-to-end column reaches the summary's smallest end-to-end distance (exactly when no

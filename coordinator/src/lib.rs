@@ -17,5 +17,6 @@ pub mod reference;
 pub mod runner;
 pub mod scene;
 pub mod schedule;
+pub mod shear_groups;
 pub mod study;
 pub mod trajectory;

@@ -171,6 +171,9 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             if let Some(f) = scene.fields_summary() {
                 println!("fields:   {f}");
             }
+            for g in &scene.groups.lines {
+                println!("group:    {g}");
+            }
             for (name, limit) in &configured.time_step_limits {
                 println!("limit:    {name}: dt <= {limit:.6e}");
             }

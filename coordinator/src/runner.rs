@@ -173,7 +173,10 @@ fn describe_and_configure(
             )));
         }
     }
-    let mut all = Configured::default();
+    let mut all = Configured {
+        notes: scene.groups.notes.clone(),
+        ..Configured::default()
+    };
     for n in nodes.iter_mut() {
         check_fit(scene, plan, &n.description)?;
         let c = configure(n.link.as_mut(), scene)?;
@@ -476,6 +479,7 @@ impl RunState {
             "beads_per_fibre": self.configured.beads_per_fibre,
             "time_step_limits": limits,
             "derived": derived,
+            "groups": scene.groups.lines,
             "notes": self.configured.notes,
             "dimensionless": self.dimensionless,
             "final_diagnostics": diagnostics,
@@ -531,6 +535,9 @@ fn drive(
         );
         if let Some(f) = scene.fields_summary() {
             eprintln!("fields:   {f}");
+        }
+        for g in &scene.groups.lines {
+            eprintln!("group:    {g}");
         }
         for n in &st.configured.notes {
             eprintln!("note:     {n}");

@@ -4,6 +4,7 @@
 //! owns its own tables (`[[fibre]]` for the fibre node, `[fluid]` and `[walls]` for the fluid
 //! node) and refuses what it does not know when it is configured, so that a new model adds
 //! keys without the coordinator or the other node changing.
+use crate::shear_groups::Resolved;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -92,8 +93,12 @@ pub struct AnalysisConfig {
 #[derive(Debug, Clone)]
 pub struct LoadedScene {
     pub scene: Scene,
-    /// The scene as TOML text after `--set` overrides: what every node is configured with.
+    /// The scene as TOML text after `--set` overrides and with S2023's flow groups replaced
+    /// by the keys they set ([`crate::shear_groups`]): what every node is configured with.
     pub toml: String,
+    /// What resolving S2023's flow groups set, for `check`, the start of a run and the
+    /// summary's `notes`.
+    pub groups: Resolved,
     /// Where it came from (`None` for the built-in example).
     pub path: Option<PathBuf>,
 }
@@ -151,19 +156,21 @@ pub fn load(path: Option<&Path>, overrides: &[String]) -> Result<LoadedScene, Sc
     let origin = path.map_or("the built-in example".to_string(), |p| {
         p.display().to_string()
     });
-    from_text(&text, &origin, overrides).map(|(scene, toml)| LoadedScene {
+    from_text(&text, &origin, overrides).map(|(scene, toml, groups)| LoadedScene {
         scene,
         toml,
+        groups,
         path: path.map(Path::to_path_buf),
     })
 }
 
-/// Parse TOML text, apply `--set PATH=VALUE` overrides, check the coordinator's keys.
+/// Parse TOML text, apply `--set PATH=VALUE` overrides, resolve S2023's flow groups, check
+/// the coordinator's keys.
 pub fn from_text(
     text: &str,
     origin: &str,
     overrides: &[String],
-) -> Result<(Scene, String), SceneError> {
+) -> Result<(Scene, String, Resolved), SceneError> {
     let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
         err(format!(
             "{origin} is not valid TOML: {}",
@@ -171,13 +178,22 @@ pub fn from_text(
         ))
     })?;
     let mut value = toml::Value::Table(table);
+    let mut replaced = Vec::new();
     for o in overrides {
         apply_override(&mut value, o)?;
+        if let (toml::Value::Table(t), Some((path, _))) = (&mut value, o.split_once('=')) {
+            replaced.extend(crate::shear_groups::supersede(t, path.trim()));
+        }
     }
+    let mut groups = match &mut value {
+        toml::Value::Table(t) => crate::shear_groups::resolve(t).map_err(err)?,
+        _ => Resolved::default(),
+    };
+    groups.lines.splice(0..0, replaced);
     let toml_text =
         toml::to_string(&value).map_err(|e| err(format!("cannot re-serialise the scene: {e}")))?;
     let scene = parse_checked(value, origin)?;
-    Ok((scene, toml_text))
+    Ok((scene, toml_text, groups))
 }
 
 fn parse_checked(value: toml::Value, origin: &str) -> Result<Scene, SceneError> {

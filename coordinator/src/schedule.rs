@@ -126,10 +126,11 @@ mod tests {
     use super::*;
 
     fn plan_of(text: &str) -> Result<Plan, String> {
-        let (scene, toml) = crate::scene::from_text(text, "test scene", &[]).unwrap();
+        let (scene, toml, groups) = crate::scene::from_text(text, "test scene", &[]).unwrap();
         plan(&LoadedScene {
             scene,
             toml,
+            groups,
             path: None,
         })
     }

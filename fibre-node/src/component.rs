@@ -1,5 +1,5 @@
 //! The fibre node as a co-simulation component ([`cosim::Component`]).
-use crate::config::{parse_scene, Coupling, ModelKind, SceneConfig, MAX_SUBSTEPS};
+use crate::config::{parse_scene, Coupling, FibreGroup, ModelKind, SceneConfig, MAX_SUBSTEPS};
 use crate::fibre::{BeadKinematics, Fibre, Model};
 use crate::quaternion::{from_array, to_array, Vec3};
 use crate::spm_exchange;
@@ -245,6 +245,7 @@ impl Component for FibreComponent {
                 param("fibre.N.bending_stiffness", "mass length^2 / time^2", Some("E I / l0"), "bead-spring k_b (U_b = -k_b sum t_i+1 . t_i)"),
                 param("fibre.N.affinity", "1", Some("0.0"), "wetting affinity psi0 of the fibre (read by the fluid node)"),
                 param("fibre.N.bending_number", "1", Some("none"), "bead-spring under fpd-lbm: bending number K = 2 k_b / (eta_f gamma l_c^2) (S2023 eq. 18), converted to k_b with fluid.viscosity, the wall shear gamma = (top - bottom) / ny and l_c = N d; excludes bending_stiffness"),
+                param("fibre.N.stretch_number", "1", Some("none"), "bead-spring under fpd-lbm: stretch number K_s = k_s / (eta_f V0 l0) (S2023 section II C), converted to k_s with fluid.viscosity, the wall speed V0 = |top - bottom| / 2 and l0 = spacing; excludes stretch_stiffness; reported for every bead-spring fibre in a wall shear"),
                 param("fibre.N.exchange", "1", Some("\"explicit\""), "SPM momentum exchange: \"explicit\" (the fluid's impulse added as it comes, L2020 eqs. 35-36; beads must be at least half as heavy as their profile's fluid) or \"implicit\" (the same impulse taken as a drag towards the profile's fluid velocity at the new bead velocity: momentum-conserving with the penalty, stable for light beads and stiff fibres)"),
                 param("fibre.N.bead_inertia", "1", Some("\"solid\""), "bead moment of inertia: \"solid\" (sharp disc or sphere, as fibre.N.density says) or \"profile\" (density times the moment of the bead's smoothed profile, SPM only); under SPM a bead whose profile fluid has 2 or more times its mass or moment of inertia is refused (explicit exchange limit)"),
                 param("fibre.N.beam_forces", "1", Some("\"paper\""), "cohesive beam: \"paper\" (L2020 eqs. 11-24) or \"energy-consistent\" (the same to leading order, exactly conservative to third order in the bead angles)"),
@@ -439,14 +440,19 @@ impl Component for FibreComponent {
                 Model::BeadSpring(b) => {
                     derived.push((format!("{p}.stretch_stiffness"), b.k_s));
                     derived.push((format!("{p}.bending_stiffness"), b.k_b));
+                    if let Some(shear) = scene.fpd_shear {
+                        // S2023 eq. 18, K = 2 k_b / (eta_f gamma l_c^2), and section II C,
+                        // K_s = k_s / (eta_f V0 l0), however the stiffnesses were given.
+                        let k = FibreGroup::Bending.of(b.k_b, shear, cfg);
+                        derived.push((format!("{p}.bending_number"), k));
+                        let ks = FibreGroup::Stretch.of(b.k_s, shear, cfg);
+                        derived.push((format!("{p}.stretch_number"), ks));
+                    }
                 }
             }
             derived.push((format!("{p}.omega_max"), lim.omega_max));
             derived.push((format!("{p}.substeps"), cfg.substeps as f64));
             derived.push((format!("{p}.affinity"), cfg.affinity));
-            if let Some(b) = cfg.bending_number {
-                derived.push((format!("{p}.bending_number"), b));
-            }
             fibres.push(f);
         }
 

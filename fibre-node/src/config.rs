@@ -68,6 +68,8 @@ pub struct FibreConfig {
     pub bending_stiffness: Option<f64>,
     pub affinity: f64,
     pub bending_number: Option<f64>,
+    /// S2023's stretch number K_s (section II C), given in place of `stretch_stiffness`.
+    pub stretch_number: Option<f64>,
     /// Cohesive beam only: `true` for the energy-consistent force law
     /// (`beam_forces = "energy-consistent"`), `false` for the paper's (`"paper"`).
     pub energy_consistent: bool,
@@ -100,6 +102,8 @@ pub struct SceneConfig {
     /// Under SPM: the beads' smoothed profile (`fluid.xi`, `fluid.xi_cutoff`, with the fluid
     /// node's defaults), which sizes the fluid a bead exchanges momentum with.
     pub spm_profile: Option<SmoothedProfile>,
+    /// Under FPD with sheared walls: the shear S2023's groups are defined on.
+    pub fpd_shear: Option<FpdShear>,
     pub fibres: Vec<FibreConfig>,
 }
 
@@ -162,6 +166,7 @@ struct RawFibre {
     bending_stiffness: Option<f64>,
     affinity: Option<f64>,
     bending_number: Option<f64>,
+    stretch_number: Option<f64>,
     beam_forces: Option<String>,
     bead_inertia: Option<String>,
     exchange: Option<String>,
@@ -317,14 +322,14 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
                  gives beads a smoothed profile; use \"solid\" or remove the key"
             ));
         }
+        let p = format!("fibre.{n}");
         if let Some(k) = f.bending_number {
-            f.bending_stiffness = Some(bending_stiffness_from_number(
-                &table,
-                &format!("fibre.{n}"),
-                f,
-                k,
-                coupling,
-            )?);
+            let kb = stiffness_from_group(&table, &p, f, FibreGroup::Bending, k, coupling)?;
+            f.bending_stiffness = Some(kb);
+        }
+        if let Some(k) = f.stretch_number {
+            let ks = stiffness_from_group(&table, &p, f, FibreGroup::Stretch, k, coupling)?;
+            f.stretch_stiffness = Some(ks);
         }
     }
 
@@ -336,6 +341,9 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         fluid_density,
         fpd_interface_ratio,
         spm_profile,
+        fpd_shear: (coupling == Coupling::Fpd)
+            .then(|| fpd_shear(&table, "").ok())
+            .flatten(),
         fibres,
     })
 }
@@ -345,41 +353,20 @@ fn toml_number(v: &toml::Value) -> Option<f64> {
     v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
 }
 
-/// `k_b` from S2023's bending number (eq. 18), `K = 2 k_b / (eta_f gamma l_c^2)`, with the
-/// scene's FPD shear: `gamma = (top - bottom) / H` for walls at `y = -1/2` and `ny - 1/2`
-/// (`H = ny`, `fluid.method = "fpd-lbm"`), `eta_f = fluid.viscosity` and `l_c = N d`. The
-/// fluid node validates these keys itself; here they are only read, and a missing or odd one
-/// is named.
-fn bending_stiffness_from_number(
-    table: &toml::Table,
-    p: &str,
-    f: &FibreConfig,
-    k: f64,
-    coupling: Coupling,
-) -> Result<f64, String> {
-    if f.model != ModelKind::BeadSpring {
-        return Err(format!(
-            "{p}.bending_number: only the bead-spring model reads this key (model is {:?})",
-            f.model.name()
-        ));
-    }
-    if f.bending_stiffness.is_some() {
-        return Err(format!(
-            "{p}.bending_number: give either bending_number (K, S2023 eq. 18) or \
-             bending_stiffness (k_b), not both"
-        ));
-    }
-    if coupling != Coupling::Fpd {
-        return Err(format!(
-            "{p}.bending_number: K is converted to k_b with the FPD shear rate and viscosity, \
-             so it needs fluid.method = \"fpd-lbm\"; give {p}.bending_stiffness instead"
-        ));
-    }
-    if !(k.is_finite() && k > 0.0) {
-        return Err(format!(
-            "{p}.bending_number: expected a positive number, got {k}"
-        ));
-    }
+/// The FPD shear S2023's fibre groups are defined on: `eta_f = fluid.viscosity`, the wall
+/// shear `gamma = (top - bottom) / H` for walls at `y = -1/2` and `ny - 1/2` (`H = ny`) and
+/// the wall speed `V0 = |top - bottom| / 2` (S2023 section IV A: walls at `-V0` and `V0`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FpdShear {
+    pub viscosity: f64,
+    pub shear_rate: f64,
+    pub wall_speed: f64,
+}
+
+/// [`FpdShear`] of a scene, or a message saying which key `need` (the fibre key asking, e.g.
+/// `fibre.0.bending_number`) is missing. The fluid node validates these keys itself; here
+/// they are only read.
+pub fn fpd_shear(table: &toml::Table, need: &str) -> Result<FpdShear, String> {
     let fluid = table.get("fluid").and_then(|f| f.as_table());
     let ny = fluid
         .and_then(|f| f.get("grid"))
@@ -388,31 +375,107 @@ fn bending_stiffness_from_number(
         .and_then(toml_number)
         .filter(|h| *h > 0.0)
         .ok_or(format!(
-            "{p}.bending_number needs fluid.grid = [nx, ny] (the gap H = ny)"
+            "{need} needs fluid.grid = [nx, ny] (the gap H = ny)"
         ))?;
-    let eta = fluid
+    let viscosity = fluid
         .and_then(|f| f.get("viscosity"))
         .and_then(toml_number)
         .filter(|e| *e > 0.0)
-        .ok_or(format!(
-            "{p}.bending_number needs a positive fluid.viscosity (eta_f)"
-        ))?;
+        .ok_or(format!("{need} needs a positive fluid.viscosity (eta_f)"))?;
     let walls = table
         .get("walls")
         .and_then(|w| w.get("velocity"))
         .and_then(|v| v.as_array())
         .map(|v| v.iter().filter_map(toml_number).collect::<Vec<_>>());
-    let gamma = match walls.as_deref() {
-        Some([b, t]) if t != b => (t - b).abs() / ny,
-        _ => {
-            return Err(format!(
-                "{p}.bending_number needs a shear: walls.velocity = [bottom, top] with \
-                 different speeds"
-            ))
+    match walls.as_deref() {
+        Some([b, t]) if t != b => Ok(FpdShear {
+            viscosity,
+            shear_rate: (t - b).abs() / ny,
+            wall_speed: 0.5 * (t - b).abs(),
+        }),
+        _ => Err(format!(
+            "{need} needs a shear: walls.velocity = [bottom, top] with different speeds"
+        )),
+    }
+}
+
+/// One of S2023's bead-spring groups, given in place of the stiffness it sets.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FibreGroup {
+    /// `bending_number` K = 2 k_b / (eta_f gamma l_c^2) (S2023 eq. 18) sets `bending_stiffness`.
+    Bending,
+    /// `stretch_number` K_s = k_s / (eta_f V0 l0) (S2023 section II C) sets
+    /// `stretch_stiffness`.
+    Stretch,
+}
+
+impl FibreGroup {
+    fn keys(self) -> (&'static str, &'static str, &'static str) {
+        match self {
+            Self::Bending => ("bending_number", "bending_stiffness", "K, S2023 eq. 18"),
+            Self::Stretch => (
+                "stretch_number",
+                "stretch_stiffness",
+                "K_s, S2023 section II C",
+            ),
         }
+    }
+
+    /// The stiffness for the group's value `x`, with l_c = N d and l0 the bond's rest length.
+    fn stiffness(self, x: f64, shear: FpdShear, f: &FibreConfig) -> f64 {
+        match self {
+            Self::Bending => {
+                let lc = f.beads as f64 * 2.0 * f.bead_radius;
+                0.5 * x * shear.viscosity * shear.shear_rate * lc * lc
+            }
+            Self::Stretch => x * shear.viscosity * shear.wall_speed * f.spacing,
+        }
+    }
+
+    /// The group a stiffness gives (the inverse of [`Self::stiffness`]).
+    pub fn of(self, stiffness: f64, shear: FpdShear, f: &FibreConfig) -> f64 {
+        stiffness / self.stiffness(1.0, shear, f)
+    }
+}
+
+/// `k_b` or `k_s` from S2023's group (K or K_s) on the scene's FPD shear ([`fpd_shear`]),
+/// with `l_c = N d`.
+fn stiffness_from_group(
+    table: &toml::Table,
+    p: &str,
+    f: &FibreConfig,
+    group: FibreGroup,
+    x: f64,
+    coupling: Coupling,
+) -> Result<f64, String> {
+    let (key, stiffness_key, name) = group.keys();
+    if f.model != ModelKind::BeadSpring {
+        return Err(format!(
+            "{p}.{key}: only the bead-spring model reads this key (model is {:?})",
+            f.model.name()
+        ));
+    }
+    let given = match group {
+        FibreGroup::Bending => f.bending_stiffness,
+        FibreGroup::Stretch => f.stretch_stiffness,
     };
-    let lc = f.beads as f64 * 2.0 * f.bead_radius;
-    Ok(0.5 * k * eta * gamma * lc * lc)
+    if given.is_some() {
+        return Err(format!(
+            "{p}.{key}: give either {key} ({name}) or {stiffness_key}, not both"
+        ));
+    }
+    if coupling != Coupling::Fpd {
+        return Err(format!(
+            "{p}.{key}: {} is converted with the FPD shear rate and viscosity, so it needs \
+             fluid.method = \"fpd-lbm\"; give {p}.{stiffness_key} instead",
+            name.split(',').next().unwrap_or(key)
+        ));
+    }
+    if !(x.is_finite() && x > 0.0) {
+        return Err(format!("{p}.{key}: expected a positive number, got {x}"));
+    }
+    let shear = fpd_shear(table, &format!("{p}.{key}"))?;
+    Ok(group.stiffness(x, shear, f))
 }
 
 /// A key with two named values: `false` for `values[0]`, `true` for `values[1]`.
@@ -549,6 +612,10 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         Some(b) => Some(finite(&format!("{p}.bending_number"), b)?),
         None => None,
     };
+    let stretch_number = match raw.stretch_number {
+        Some(b) => Some(finite(&format!("{p}.stretch_number"), b)?),
+        None => None,
+    };
     if raw.beam_forces.is_some() && model != ModelKind::CohesiveBeam {
         return Err(format!(
             "{p}.beam_forces: only the cohesive-beam model reads this key (model is {:?})",
@@ -595,6 +662,7 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         bending_stiffness,
         affinity,
         bending_number,
+        stretch_number,
     })
 }
 
@@ -697,6 +765,32 @@ youngs_modulus = 1.0
         assert_eq!(f.bending_number, Some(3.3));
         let kb = f.bending_stiffness.unwrap();
         assert!((kb - 2.64).abs() < 1e-12, "{kb}");
+    }
+
+    /// S2023 section II C inverted: k_s = K_s eta_f V0 l0 with V0 = 0.04 (walls at -+0.04) and
+    /// l0 = d = 8: K_s = 480 gives k_s = 480 x 0.5 x 0.04 x 8 = 76.8; the scene's shear is
+    /// kept for the reported groups.
+    #[test]
+    fn stretch_number_sets_the_stretch_stiffness_from_the_fpd_shear() {
+        let s = parse_scene(&format!("{FPD_SHEAR}stretch_number = 480\n")).unwrap();
+        let ks = s.fibres[0].stretch_stiffness.unwrap();
+        assert!((ks - 76.8).abs() < 1e-12, "{ks}");
+        let shear = s.fpd_shear.unwrap();
+        assert_eq!(shear.wall_speed, 0.04);
+        assert!((shear.shear_rate - 0.08 / 160.0).abs() < 1e-18);
+        let back = FibreGroup::Stretch.of(ks, shear, &s.fibres[0]);
+        assert!((back - 480.0).abs() < 1e-10, "{back}");
+        let e = err(&format!(
+            "{FPD_SHEAR}stretch_number = 480\nstretch_stiffness = 1.0\n"
+        ));
+        assert!(e.contains("give either stretch_number"), "{e}");
+        let e = err(&(FPD_SHEAR.replace("\"fpd-lbm\"", "\"spm\"") + "stretch_number = 4\n"));
+        assert!(
+            e.contains("fibre.0.stretch_number") && e.contains("fpd-lbm"),
+            "{e}"
+        );
+        let e = err(&with("stretch_number = 4\n"));
+        assert!(e.contains("only the bead-spring model"), "{e}");
     }
 
     #[test]

@@ -374,7 +374,9 @@ impl FpdRun {
         };
 
         let mut derived = vec![
-            ("fluid.kinematic_viscosity".to_string(), nu),
+            // eta_f, shown because S2023's Re_ps may have set it (`fluid.particle_shear_reynolds`).
+            ("fluid.viscosity".to_string(), scene.viscosity),
+            ("fluid.kinematic_viscosity".into(), nu),
             (
                 "fluid.viscosity_ratio".into(),
                 scene.coupling.viscosity_ratio,

@@ -1,0 +1,402 @@
+//! S2023's flow groups given in a scene in place of the keys they set (S2023 eq. 18):
+//!
+//! - `fluid.confinement` C = l_c / H sets the gap: `fluid.grid = [nx]` becomes
+//!   `[nx, round(l_c / C)]`;
+//! - `fluid.particle_shear_reynolds` Re_ps = rho gamma l_c^2 / (4 eta_f) sets
+//!   `fluid.viscosity` = rho gamma l_c^2 / (4 Re_ps), with gamma = (top - bottom) / H.
+//!
+//! l_c = N d is fibre 0's contour (`beads` x 2 `bead_radius`), as in the nodes' derived
+//! values. Both groups span the fluid, wall and fibre tables, so they are resolved here, once,
+//! before any node is configured: every node and both process layouts read the same
+//! `fluid.grid` and `fluid.viscosity`. The fibre's own groups (K, K_s) stay with the fibre
+//! node (`fibre.N.bending_number`, `fibre.N.stretch_number`), which reads the resolved
+//! viscosity and gap. The nodes report the groups the resolved keys give
+//! (`fluid.confinement`, `fluid.particle_shear_reynolds`), so a rounded gap shows there.
+
+/// The FPD fluid's default density (`fluid.density` absent), as the fluid node reads it.
+const DEFAULT_DENSITY: f64 = 1.0;
+
+/// What resolving changed, in words, and advice where a group could not be met exactly.
+#[derive(Debug, Default, Clone, PartialEq)]
+pub struct Resolved {
+    /// One line a group: `fluid.confinement = 0.5 -> fluid.grid = [200, 160]`.
+    pub lines: Vec<String>,
+    /// A group the lattice cannot realise exactly (a gap rounded to whole nodes).
+    pub notes: Vec<String>,
+}
+
+fn number(v: Option<&toml::Value>) -> Option<f64> {
+    v.and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+}
+
+/// A group's value: a finite positive number, else a message naming the key.
+fn group_value(fluid: &toml::Table, key: &str) -> Result<Option<f64>, String> {
+    match fluid.get(key) {
+        None => Ok(None),
+        Some(v) => match number(Some(v)) {
+            Some(x) if x.is_finite() && x > 0.0 => Ok(Some(x)),
+            _ => Err(format!("fluid.{key}: expected a positive number, got {v}")),
+        },
+    }
+}
+
+/// Fibre 0's contour l_c = N d (S2023: l_c = N l0 with l0 = d = 2a).
+fn contour(scene: &toml::Table, key: &str) -> Result<f64, String> {
+    let f0 = scene
+        .get("fibre")
+        .and_then(|f| f.as_array())
+        .and_then(|a| a.first())
+        .and_then(|f| f.as_table());
+    let beads = f0.and_then(|f| f.get("beads")).and_then(|b| b.as_integer());
+    let radius = number(f0.and_then(|f| f.get("bead_radius")));
+    match (beads, radius) {
+        (Some(n), Some(a)) if n > 0 && a.is_finite() && a > 0.0 => Ok(n as f64 * 2.0 * a),
+        _ => Err(format!(
+            "fluid.{key} is defined on fibre 0's contour l_c = N d (S2023 eq. 18): the scene \
+             needs fibre.0.beads and fibre.0.bead_radius"
+        )),
+    }
+}
+
+/// Pairs of keys that set the same thing: a group and the key it stands for. A scene file may
+/// give one of each pair; an override (`--set`, a study's `[set]` and `[[vary]]`) of one
+/// replaces the other, so that a scene given by its viscosity can be run at a Reynolds
+/// number and the other way round.
+const PAIRS: [(&str, &str); 4] = [
+    ("particle_shear_reynolds", "viscosity"),
+    ("confinement", "grid"),
+    ("bending_number", "bending_stiffness"),
+    ("stretch_number", "stretch_stiffness"),
+];
+
+/// After the override of `path`: drop the key of its pair ([`PAIRS`]) from the scene, and say
+/// so. `fluid.confinement` keeps the grid's length (`[nx, ny]` becomes `[nx]`); a grid of
+/// one size, `[nx]`, keeps the confinement.
+pub fn supersede(scene: &mut toml::Table, path: &str) -> Option<String> {
+    let parts: Vec<&str> = path.split('.').collect();
+    let (table, key, prefix) = match parts.as_slice() {
+        ["fluid", key] => (
+            scene.get_mut("fluid")?.as_table_mut()?,
+            *key,
+            "fluid".to_string(),
+        ),
+        ["fibre", n, key] => {
+            let i: usize = n.parse().ok()?;
+            let t = scene
+                .get_mut("fibre")?
+                .as_array_mut()?
+                .get_mut(i)?
+                .as_table_mut()?;
+            (t, *key, format!("fibre.{n}"))
+        }
+        _ => return None,
+    };
+    let other = PAIRS.iter().find_map(|&(g, k)| match key {
+        _ if key == g => Some(k),
+        _ if key == k => Some(g),
+        _ => None,
+    })?;
+    let line = |what: &str| {
+        Some(format!(
+            "--set {path} replaces the scene's {prefix}.{other}{what}"
+        ))
+    };
+    match (key, other) {
+        ("confinement", "grid") => match table.get_mut("grid") {
+            Some(toml::Value::Array(g)) if g.len() > 1 => {
+                g.truncate(1);
+                line(" gap (fluid.grid keeps nx)")
+            }
+            _ => None,
+        },
+        ("grid", _) => {
+            let full = table
+                .get("grid")
+                .and_then(|g| g.as_array())
+                .is_some_and(|g| g.len() > 1);
+            if full && table.remove("confinement").is_some() {
+                line("")
+            } else {
+                None
+            }
+        }
+        _ => table.remove(other).and_then(|_| line("")),
+    }
+}
+
+/// Replace `fluid.confinement` and `fluid.particle_shear_reynolds` in `scene` by the keys
+/// they set. A scene with neither is left as it is.
+pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
+    const C: &str = "confinement";
+    const RE: &str = "particle_shear_reynolds";
+    let mut out = Resolved::default();
+    let Some(toml::Value::Table(fluid)) = scene.get("fluid") else {
+        return Ok(out);
+    };
+    let (c, re) = (group_value(fluid, C)?, group_value(fluid, RE)?);
+    if c.is_none() && re.is_none() {
+        return Ok(out);
+    }
+    let key = if c.is_some() { C } else { RE };
+    if fluid.get("method").and_then(|m| m.as_str()) != Some("fpd-lbm") {
+        return Err(format!(
+            "fluid.{key}: S2023's groups are read for fluid.method = \"fpd-lbm\" (its gap is \
+             the lattice's ny); give fluid.grid and fluid.viscosity instead"
+        ));
+    }
+    let lc = contour(scene, key)?;
+    let walls: Option<Vec<f64>> = scene
+        .get("walls")
+        .and_then(|w| w.get("velocity"))
+        .and_then(|v| v.as_array())
+        .map(|v| v.iter().filter_map(|x| number(Some(x))).collect());
+    let fluid = scene
+        .get_mut("fluid")
+        .and_then(|f| f.as_table_mut())
+        .expect("checked above");
+    let grid: Vec<toml::Value> = match fluid.get("grid") {
+        Some(toml::Value::Array(g)) => g.clone(),
+        _ => Vec::new(),
+    };
+    let ny = if let Some(c) = c {
+        let nx = match grid.as_slice() {
+            [nx] if nx.is_integer() => nx.clone(),
+            _ => {
+                return Err(format!(
+                    "fluid.confinement sets the gap H = l_c / C (S2023 eq. 18), so fluid.grid \
+                     takes the length alone: grid = [nx] (got {})",
+                    fluid
+                        .get("grid")
+                        .map_or("no fluid.grid".to_string(), |g| g.to_string())
+                ))
+            }
+        };
+        let exact = lc / c;
+        let h = exact.round();
+        if h < 1.0 {
+            return Err(format!(
+                "fluid.confinement = {c}: the gap l_c / C = {exact} is below one lattice node"
+            ));
+        }
+        fluid.insert(
+            "grid".into(),
+            toml::Value::Array(vec![nx.clone(), toml::Value::Integer(h as i64)]),
+        );
+        fluid.remove(C);
+        out.lines.push(format!(
+            "fluid.confinement = {c} -> fluid.grid = [{nx}, {h}] (H = l_c / C, l_c = {lc})"
+        ));
+        if (h - exact).abs() > 1e-9 * exact {
+            out.notes.push(format!(
+                "fluid.confinement = {c}: the gap l_c / C = {exact:.4} is rounded to {h} lattice \
+                 nodes, so the scene runs at C = {:.6} (the summary's fluid.confinement)",
+                lc / h
+            ));
+        }
+        h
+    } else {
+        match grid.as_slice() {
+            [_, ny] => number(Some(ny))
+                .filter(|h| *h > 0.0)
+                .ok_or("fluid.grid: expected [nx, ny] with positive sizes")?,
+            _ => {
+                return Err(
+                    "fluid.particle_shear_reynolds needs the gap: fluid.grid = [nx, ny], or \
+                         fluid.grid = [nx] with fluid.confinement"
+                        .into(),
+                )
+            }
+        }
+    };
+    if let Some(re) = re {
+        if fluid.contains_key("viscosity") {
+            return Err(
+                "fluid.particle_shear_reynolds sets fluid.viscosity = rho gamma l_c^2 / \
+                 (4 Re_ps) (S2023 eq. 18): give one of the two, not both"
+                    .into(),
+            );
+        }
+        let gamma = match walls.as_deref() {
+            Some([b, t]) if t != b => (t - b).abs() / ny,
+            _ => {
+                return Err(
+                    "fluid.particle_shear_reynolds needs a shear: walls.velocity = \
+                            [bottom, top] with different speeds"
+                        .into(),
+                )
+            }
+        };
+        let rho = match fluid.get("density") {
+            None => DEFAULT_DENSITY,
+            v => number(v)
+                .filter(|r| r.is_finite() && *r > 0.0)
+                .ok_or("fluid.density: expected a positive number")?,
+        };
+        let eta = rho * gamma * lc * lc / (4.0 * re);
+        fluid.insert("viscosity".into(), toml::Value::Float(eta));
+        fluid.remove(RE);
+        out.lines.push(format!(
+            "fluid.particle_shear_reynolds = {re} -> fluid.viscosity = {eta} (rho gamma l_c^2 \
+             / (4 Re_ps), gamma = {gamma})"
+        ));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// S2023 Fig. 7's scene at d = 8: N = 10 (l_c = 80), walls at -+0.05.
+    const FIG7: &str = r#"
+dimensions = 2
+[fluid]
+method = "fpd-lbm"
+grid = [200]
+confinement = 0.5
+particle_shear_reynolds = 1.5
+[walls]
+velocity = [-0.05, 0.05]
+[[fibre]]
+beads = 10
+bead_radius = 4.0
+"#;
+
+    fn table(text: &str) -> toml::Table {
+        text.parse().unwrap()
+    }
+
+    fn err(text: &str) -> String {
+        resolve(&mut table(text)).unwrap_err()
+    }
+
+    /// H = l_c / C = 160 and eta_f = rho gamma l_c^2 / (4 Re_ps) with gamma = 0.1 / 160:
+    /// 6.25e-4 x 6400 / 6 = 2/3, the values `configs/fpd/flexible_shear.toml` gives by hand.
+    #[test]
+    fn s2023_fig7_groups_give_the_gap_and_viscosity_of_the_hand_made_scene() {
+        let mut t = table(FIG7);
+        let r = resolve(&mut t).unwrap();
+        let fluid = t["fluid"].as_table().unwrap();
+        assert_eq!(fluid["grid"].as_array().unwrap()[1].as_integer(), Some(160));
+        let eta = fluid["viscosity"].as_float().unwrap();
+        assert!((eta - 2.0 / 3.0).abs() < 1e-15, "{eta}");
+        assert!(!fluid.contains_key("confinement"));
+        assert!(!fluid.contains_key("particle_shear_reynolds"));
+        assert_eq!(r.lines.len(), 2);
+        assert!(r.notes.is_empty(), "{:?}", r.notes);
+    }
+
+    /// S2023's C = 0.87 at l_c = 80: H = 91.95 rounds to 92, C = 0.869565.
+    #[test]
+    fn a_gap_off_the_lattice_is_rounded_with_a_note() {
+        let mut t = table(&FIG7.replace("0.5\n", "0.87\n"));
+        let r = resolve(&mut t).unwrap();
+        assert_eq!(t["fluid"]["grid"][1].as_integer(), Some(92));
+        assert_eq!(r.notes.len(), 1);
+        assert!(r.notes[0].contains("0.869565"), "{}", r.notes[0]);
+        // The Reynolds number is met on the rounded gap: gamma = 0.1 / 92.
+        let eta = t["fluid"]["viscosity"].as_float().unwrap();
+        let want = 0.1 / 92.0 * 6400.0 / 6.0;
+        assert!((eta - want).abs() < 1e-15 * want, "{eta} vs {want}");
+    }
+
+    #[test]
+    fn one_group_alone_and_a_scene_without_groups() {
+        let mut t = table(&FIG7.replace("particle_shear_reynolds = 1.5\n", "viscosity = 0.5\n"));
+        let r = resolve(&mut t).unwrap();
+        assert_eq!(r.lines.len(), 1);
+        assert_eq!(t["fluid"]["viscosity"].as_float(), Some(0.5));
+        let text = FIG7
+            .replace("confinement = 0.5\n", "")
+            .replace("[200]", "[200, 40]");
+        let mut t = table(&text);
+        resolve(&mut t).unwrap();
+        let eta = t["fluid"]["viscosity"].as_float().unwrap();
+        assert!((eta - 0.1 / 40.0 * 6400.0 / 6.0).abs() < 1e-15);
+        let plain = FIG7
+            .replace("confinement = 0.5\n", "")
+            .replace("particle_shear_reynolds = 1.5\n", "");
+        let mut t = table(&plain);
+        let before = t.clone();
+        assert_eq!(resolve(&mut t).unwrap(), Resolved::default());
+        assert_eq!(t, before);
+    }
+
+    /// `configs/fpd/flexible_shear.toml` is given by its gap and viscosity: overriding its
+    /// groups replaces them, and overriding a key back replaces the group.
+    #[test]
+    fn an_override_of_one_key_of_a_pair_replaces_the_other() {
+        let hand = FIG7
+            .replace("grid = [200]\n", "grid = [200, 160]\n")
+            .replace("confinement = 0.5\n", "")
+            .replace(
+                "particle_shear_reynolds = 1.5\n",
+                "viscosity = 0.6666666666666666\n",
+            )
+            .replace(
+                "bead_radius = 4.0\n",
+                "bead_radius = 4.0\nstretch_stiffness = 128.0\n",
+            );
+        let mut t = table(&hand);
+        t["fluid"]
+            .as_table_mut()
+            .unwrap()
+            .insert("confinement".into(), toml::Value::Float(0.87));
+        let line = supersede(&mut t, "fluid.confinement").unwrap();
+        assert!(line.contains("fluid.grid"), "{line}");
+        assert_eq!(t["fluid"]["grid"].as_array().unwrap().len(), 1);
+        t["fluid"]
+            .as_table_mut()
+            .unwrap()
+            .insert("particle_shear_reynolds".into(), toml::Value::Float(1.5));
+        supersede(&mut t, "fluid.particle_shear_reynolds").unwrap();
+        assert!(!t["fluid"].as_table().unwrap().contains_key("viscosity"));
+        resolve(&mut t).unwrap();
+        assert_eq!(t["fluid"]["grid"][1].as_integer(), Some(92));
+        let f0 = t["fibre"][0].as_table_mut().unwrap();
+        f0.insert("stretch_number".into(), toml::Value::Float(240.0));
+        supersede(&mut t, "fibre.0.stretch_number").unwrap();
+        assert!(!t["fibre"][0]
+            .as_table()
+            .unwrap()
+            .contains_key("stretch_stiffness"));
+        // Back: a full grid replaces the confinement; a grid of nx alone keeps it.
+        let mut t = table(FIG7);
+        t["fluid"].as_table_mut().unwrap().insert(
+            "grid".into(),
+            toml::Value::Array(vec![toml::Value::Integer(100)]),
+        );
+        assert_eq!(supersede(&mut t, "fluid.grid"), None);
+        assert!(t["fluid"].as_table().unwrap().contains_key("confinement"));
+        t["fluid"].as_table_mut().unwrap().insert(
+            "grid".into(),
+            toml::Value::Array(vec![toml::Value::Integer(100), toml::Value::Integer(80)]),
+        );
+        assert!(supersede(&mut t, "fluid.grid").is_some());
+        assert!(!t["fluid"].as_table().unwrap().contains_key("confinement"));
+        // Keys outside the pairs are left alone.
+        assert_eq!(supersede(&mut t, "fluid.density"), None);
+        assert_eq!(supersede(&mut t, "time.dt"), None);
+    }
+
+    #[test]
+    fn what_cannot_be_resolved_is_named() {
+        let e = err(&FIG7.replace("[200]", "[200, 160]"));
+        assert!(e.contains("grid = [nx]"), "{e}");
+        let e = err(&FIG7.replace("[fluid]\n", "[fluid]\nviscosity = 1.0\n"));
+        assert!(e.contains("not both"), "{e}");
+        let e = err(&FIG7.replace("fpd-lbm", "spm"));
+        assert!(e.contains("fpd-lbm"), "{e}");
+        let e = err(&FIG7.replace("[-0.05, 0.05]", "[0.05, 0.05]"));
+        assert!(e.contains("shear"), "{e}");
+        let e = err(&FIG7.replace("beads = 10\n", ""));
+        assert!(e.contains("fibre.0.beads"), "{e}");
+        let e = err(&FIG7.replace("= 0.5\n", "= -0.5\n"));
+        assert!(
+            e.contains("fluid.confinement") && e.contains("positive"),
+            "{e}"
+        );
+        let e = err(&FIG7.replace("confinement = 0.5\n", ""));
+        assert!(e.contains("fluid.grid"), "{e}");
+    }
+}
