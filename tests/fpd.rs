@@ -366,14 +366,14 @@ fn fpd_orbits_fall_in_s2023_regimes() {
 /// diagram given as C = 0.5, Re_ps = 1.5, K = 3.3 and K_s = 240 is resolved to the gap
 /// H = l_c / C = 80, eta_f = rho gamma l_c^2 / (4 Re_ps) = 1/3 (gamma = 0.1 / 80, l_c = 40),
 /// k_s = K_s eta_f V0 l0 = 48 eta_f (V0 = 0.05, l0 = 4) and k_b = K eta_f gamma l_c^2 / 2,
-/// which the hand-made rows of `fpd_orbits_fall_in_s2023_regimes` write out; the fluid node
-/// reports back the groups asked for; and the same scene given by those keys runs the same
-/// bits.
+/// which the hand-made rows of `fpd_orbits_fall_in_s2023_regimes` write out, and
+/// `fibre.0.centred` puts bead 0 at [32, 39.5] (midpoint x = nx / 2, y = (H - 1) / 2); the
+/// nodes report back the groups asked for; and the same scene given by those keys runs the
+/// same bits.
 #[test]
 fn s2023_groups_set_the_keys_they_stand_for() {
     let common = [
         "fibre.0.bead_radius=2.0",
-        "fibre.0.start=[32.0,39.5,0.0]",
         "time.steps=1500",
         "output.interval=500",
         "analysis.metrics=[]",
@@ -391,6 +391,7 @@ fn s2023_groups_set_the_keys_they_stand_for() {
         "fluid.particle_shear_reynolds=1.5".into(),
         "fibre.0.bending_number=3.3".into(),
         "fibre.0.stretch_number=240".into(),
+        "fibre.0.centred=true".into(),
     ]);
     let cfg = config("fpd/flexible_shear.toml");
     let a = run_in_process(&cfg, &groups, "fpd-groups");
@@ -418,7 +419,11 @@ fn s2023_groups_set_the_keys_they_stand_for() {
         .iter()
         .map(|l| l.as_str().unwrap())
         .collect();
-    assert_eq!(lines.len(), 4, "{lines:?}");
+    assert_eq!(lines.len(), 5, "{lines:?}");
+    assert!(
+        lines[2].contains("replaces the scene's fibre.0.start"),
+        "{lines:?}"
+    );
     assert!(
         lines[0].contains("replaces the scene's fluid.viscosity"),
         "{lines:?}"
@@ -427,13 +432,14 @@ fn s2023_groups_set_the_keys_they_stand_for() {
         lines[1].contains("replaces the scene's fibre.0.stretch_stiffness"),
         "{lines:?}"
     );
-    assert!(lines[2].contains("fluid.grid = [100, 80]"), "{lines:?}");
+    assert!(lines[3].contains("fluid.grid = [100, 80]"), "{lines:?}");
 
     let by_keys = with(&[
         "fluid.grid=[100,80]".into(),
         format!("fluid.viscosity={eta}"),
         format!("fibre.0.bending_stiffness={kb}"),
         format!("fibre.0.stretch_stiffness={ks}"),
+        "fibre.0.start=[32.0,39.5,0.0]".into(),
     ]);
     let b = run_in_process(&cfg, &by_keys, "fpd-groups-by-keys");
     let states =

@@ -62,16 +62,18 @@ fn contour(scene: &toml::Table, key: &str) -> Result<f64, String> {
 /// give one of each pair; an override (`--set`, a study's `[set]` and `[[vary]]`) of one
 /// replaces the other, so that a scene given by its viscosity can be run at a Reynolds
 /// number and the other way round.
-const PAIRS: [(&str, &str); 4] = [
+const PAIRS: [(&str, &str); 5] = [
     ("particle_shear_reynolds", "viscosity"),
     ("confinement", "grid"),
     ("bending_number", "bending_stiffness"),
     ("stretch_number", "stretch_stiffness"),
+    // `fibre.N.centred = true` places the fibre at the centre of the gap, whatever the gap.
+    ("centred", "start"),
 ];
 
 /// After the override of `path`: drop the key of its pair ([`PAIRS`]) from the scene, and say
 /// so. `fluid.confinement` keeps the grid's length (`[nx, ny]` becomes `[nx]`); a grid of
-/// one size, `[nx]`, keeps the confinement.
+/// one size, `[nx]`, keeps the confinement; `centred = false` keeps `start`.
 pub fn supersede(scene: &mut toml::Table, path: &str) -> Option<String> {
     let parts: Vec<&str> = path.split('.').collect();
     let (table, key, prefix) = match parts.as_slice() {
@@ -109,6 +111,7 @@ pub fn supersede(scene: &mut toml::Table, path: &str) -> Option<String> {
             }
             _ => None,
         },
+        ("centred", _) if table.get("centred").and_then(|c| c.as_bool()) != Some(true) => None,
         ("grid", _) => {
             let full = table
                 .get("grid")
@@ -374,6 +377,18 @@ bead_radius = 4.0
         );
         assert!(supersede(&mut t, "fluid.grid").is_some());
         assert!(!t["fluid"].as_table().unwrap().contains_key("confinement"));
+        // A centred fibre drops its start; centred = false keeps it.
+        let mut t = table(&FIG7.replace(
+            "bead_radius = 4.0\n",
+            "bead_radius = 4.0\nstart = [1.0, 2.0, 0.0]\n",
+        ));
+        let f0 = t["fibre"][0].as_table_mut().unwrap();
+        f0.insert("centred".into(), toml::Value::Boolean(false));
+        assert_eq!(supersede(&mut t, "fibre.0.centred"), None);
+        let f0 = t["fibre"][0].as_table_mut().unwrap();
+        f0.insert("centred".into(), toml::Value::Boolean(true));
+        assert!(supersede(&mut t, "fibre.0.centred").is_some());
+        assert!(!t["fibre"][0].as_table().unwrap().contains_key("start"));
         // Keys outside the pairs are left alone.
         assert_eq!(supersede(&mut t, "fluid.density"), None);
         assert_eq!(supersede(&mut t, "time.dt"), None);

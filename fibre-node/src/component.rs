@@ -229,6 +229,7 @@ impl Component for FibreComponent {
                 param("fibre.N.shear_modulus", "mass / (length time^2)", Some("E / 2.6"), "shear modulus G (torsion, cohesive beam in 3D); default E / (2 (1 + 0.3))"),
                 param("fibre.N.density", "mass / length^3", Some("1.0"), "bead density; 3D sphere m = rho 4/3 pi r^3, 2D disc of unit thickness m = rho pi r^2"),
                 param("fibre.N.start", len, Some("[0.0, 0.0, 0.0]"), "position of bead 0"),
+                param("fibre.N.centred", "1", Some("false"), "true: start such that the fibre's midpoint lies at the centre of the gap between the walls, y = (ny - 1) / 2, x = nx / 2 (z = nz / 2), as S2023 place it; excludes start"),
                 param("fibre.N.direction", "1", Some("[1.0, 0.0, 0.0]"), "direction of the straight initial fibre (normalised; z = 0 in 2D)"),
                 param("fibre.N.spacing", len, Some("2 bead_radius"), "initial and rest distance between neighbouring beads"),
                 param("fibre.N.self_contact", "1", Some("false"), "true: beads that are not neighbours along the chain repel while their spheres overlap, with the fibre's axial bond stiffness (excluded volume; neither paper has it, so off by default)"),

@@ -49,6 +49,9 @@ pub struct FibreConfig {
     pub shear_modulus: f64,
     pub density: f64,
     pub start: [f64; 3],
+    /// `centred = true`: `start` is set so that the fibre's midpoint lies at the centre of the
+    /// gap between the walls ([`centre_in_gap`]).
+    pub centred: bool,
     /// Unit vector.
     pub direction: [f64; 3],
     pub spacing: f64,
@@ -150,6 +153,8 @@ struct RawFibre {
     shear_modulus: Option<f64>,
     density: Option<f64>,
     start: Option<[f64; 3]>,
+    #[serde(default)]
+    centred: bool,
     direction: Option<[f64; 3]>,
     spacing: Option<f64>,
     initial_bend: Option<f64>,
@@ -323,6 +328,9 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
             ));
         }
         let p = format!("fibre.{n}");
+        if f.centred {
+            f.start = centre_in_gap(&table, &p, f)?;
+        }
         if let Some(k) = f.bending_number {
             let kb = stiffness_from_group(&table, &p, f, FibreGroup::Bending, k, coupling)?;
             f.bending_stiffness = Some(kb);
@@ -397,6 +405,31 @@ pub fn fpd_shear(table: &toml::Table, need: &str) -> Result<FpdShear, String> {
             "{need} needs a shear: walls.velocity = [bottom, top] with different speeds"
         )),
     }
+}
+
+/// `start` for a fibre whose midpoint lies at the centre of the gap between the walls, as
+/// S2023 place theirs (section IV A): y = (ny - 1) / 2, midway between the FPD walls at
+/// y = -1/2 and ny - 1/2 and between the SPM slabs' faces at T - 1/2 and ny - T - 1/2; along
+/// the periodic axes x = nx / 2 (and z = nz / 2 in 3D).
+fn centre_in_gap(table: &toml::Table, p: &str, f: &FibreConfig) -> Result<[f64; 3], String> {
+    let grid: Vec<f64> = table
+        .get("fluid")
+        .and_then(|f| f.get("grid"))
+        .and_then(|g| g.as_array())
+        .map(|g| g.iter().filter_map(toml_number).collect())
+        .unwrap_or_default();
+    if grid.len() < 2 || !table.contains_key("walls") {
+        return Err(format!(
+            "{p}.centred = true needs a fluid between walls: fluid.grid and walls.velocity"
+        ));
+    }
+    let mid = [
+        0.5 * grid[0],
+        0.5 * (grid[1] - 1.0),
+        grid.get(2).map_or(0.0, |nz| 0.5 * nz),
+    ];
+    let half = 0.5 * (f.beads as f64 - 1.0) * f.spacing;
+    Ok(std::array::from_fn(|k| mid[k] - half * f.direction[k]))
 }
 
 /// One of S2023's bead-spring groups, given in place of the stiffness it sets.
@@ -523,6 +556,12 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         Some(x) => positive(&format!("{p}.density"), x)?,
         None => 1.0,
     };
+    if raw.centred && raw.start.is_some() {
+        return Err(format!(
+            "{p}.centred = true places the fibre's midpoint at the centre of the gap; give \
+             either centred or start, not both"
+        ));
+    }
     let start = finite_vec(&format!("{p}.start"), raw.start.unwrap_or([0.0; 3]))?;
     let start = planar_vec(&format!("{p}.start"), start, dims)?;
     let dpath = format!("{p}.direction");
@@ -653,6 +692,7 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         spacing,
         initial_bend,
         self_contact: raw.self_contact,
+        centred: raw.centred,
         clamp,
         loads,
         damping,
@@ -791,6 +831,23 @@ youngs_modulus = 1.0
         );
         let e = err(&with("stretch_number = 4\n"));
         assert!(e.contains("only the bead-spring model"), "{e}");
+    }
+
+    /// The midpoint at x = nx / 2, y = (ny - 1) / 2: ten beads 8 apart along x on a 200 x 160
+    /// lattice start at [64, 79.5] (`configs/fpd/flexible_shear.toml`); in 3D, z = nz / 2.
+    #[test]
+    fn a_centred_fibre_starts_at_the_centre_of_the_gap() {
+        let s = parse_scene(&format!("{FPD_SHEAR}centred = true\n")).unwrap();
+        assert_eq!(s.fibres[0].start, [64.0, 79.5, 0.0]);
+        let spm = "dimensions = 3\n[time]\ndt = 0.1\n[fluid]\nmethod = \"spm\"\ngrid = [32, 40, 16]\n\
+                   [walls]\nvelocity = [0.0, 0.1]\n[[fibre]]\nmodel = \"cohesive-beam\"\nbeads = 3\n\
+                   bead_radius = 2.0\nyoungs_modulus = 1.0\ndirection = [0, 1, 0]\ncentred = true\n";
+        let s = parse_scene(spm).unwrap();
+        assert_eq!(s.fibres[0].start, [16.0, 15.5, 8.0]);
+        let e = err(&format!("{FPD_SHEAR}centred = true\nstart = [1, 2, 0]\n"));
+        assert!(e.contains("either centred or start"), "{e}");
+        let e = err(&with("centred = true"));
+        assert!(e.contains("fibre.0.centred") && e.contains("walls"), "{e}");
     }
 
     #[test]
