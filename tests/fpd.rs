@@ -328,18 +328,18 @@ fn fpd_hard_case_stays_bounded() {
 #[test]
 fn fpd_orbits_fall_in_s2023_regimes() {
     let run = |name: &str, k: f64, c_row: usize| {
-        let rows = [
-            ("[100, 80]", 0.333333, 16.0, "[32.0, 39.5, 0.0]", 48000),
-            ("[100, 46]", 0.579710, 27.82609, "[32.0, 22.5, 0.0]", 27600),
-        ];
-        let (grid, eta, ks, start, steps) = rows[c_row];
+        // S2023's groups (`s2023_groups_set_the_keys_they_stand_for`): C = 0.5 and 0.87 give
+        // H = 80 and 46 (C = 0.8696); gamma t = 60 is 600 H steps; K_s = 240 is k_s = 48 eta_f.
+        let rows = [(0.5, 48000), (0.87, 27600)];
+        let (c, steps) = rows[c_row];
         let o: Vec<String> = vec![
             "fibre.0.bead_radius=2.0".into(),
             format!("fibre.0.bending_number={k}"),
-            format!("fluid.grid={grid}"),
-            format!("fluid.viscosity={eta}"),
-            format!("fibre.0.stretch_stiffness={ks}"),
-            format!("fibre.0.start={start}"),
+            "fluid.grid=[100]".into(),
+            format!("fluid.confinement={c}"),
+            "fluid.particle_shear_reynolds=1.5".into(),
+            "fibre.0.stretch_number=240".into(),
+            "fibre.0.centred=true".into(),
             format!("time.steps={steps}"),
             "output.interval=5000".into(),
             "analysis.metrics=[\"orbit\",\"stuck_angle_deg\"]".into(),
@@ -366,8 +366,9 @@ fn fpd_orbits_fall_in_s2023_regimes() {
 /// diagram given as C = 0.5, Re_ps = 1.5, K = 3.3 and K_s = 240 is resolved to the gap
 /// H = l_c / C = 80, eta_f = rho gamma l_c^2 / (4 Re_ps) = 1/3 (gamma = 0.1 / 80, l_c = 40),
 /// k_s = K_s eta_f V0 l0 = 48 eta_f (V0 = 0.05, l0 = 4) and k_b = K eta_f gamma l_c^2 / 2,
-/// which the hand-made rows of `fpd_orbits_fall_in_s2023_regimes` write out, and
-/// `fibre.0.centred` puts bead 0 at [32, 39.5] (midpoint x = nx / 2, y = (H - 1) / 2); the
+/// which the first row of `docs/validation/fpd_critical_points.study.toml` writes out by hand
+/// (eta_f 0.333333, k_s 16), and `fibre.0.centred` puts bead 0 at that row's [32, 39.5]
+/// (midpoint x = nx / 2, y = (H - 1) / 2); the
 /// nodes report back the groups asked for; and the same scene given by those keys runs the
 /// same bits.
 #[test]
