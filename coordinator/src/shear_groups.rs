@@ -13,6 +13,8 @@
 //! viscosity and gap. The nodes report the groups the resolved keys give
 //! (`fluid.confinement`, `fluid.particle_shear_reynolds`), so a rounded gap shows there.
 
+use crate::metrics::number;
+
 /// The FPD fluid's default density (`fluid.density` absent), as the fluid node reads it.
 const DEFAULT_DENSITY: f64 = 1.0;
 
@@ -23,10 +25,6 @@ pub struct Resolved {
     pub lines: Vec<String>,
     /// A group the lattice cannot realise exactly (a gap rounded to whole nodes).
     pub notes: Vec<String>,
-}
-
-fn number(v: Option<&toml::Value>) -> Option<f64> {
-    v.and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
 }
 
 /// A group's value: a finite positive number, else a message naming the key.
