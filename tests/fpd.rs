@@ -366,8 +366,9 @@ fn fpd_orbits_fall_in_s2023_regimes() {
 /// diagram given as C = 0.5, Re_ps = 1.5, K = 3.3 and K_s = 240 is resolved to the gap
 /// H = l_c / C = 80, eta_f = rho gamma l_c^2 / (4 Re_ps) = 1/3 (gamma = 0.1 / 80, l_c = 40),
 /// k_s = K_s eta_f V0 l0 = 48 eta_f (V0 = 0.05, l0 = 4) and k_b = K eta_f gamma l_c^2 / 2,
-/// which the first row of `docs/validation/fpd_critical_points.study.toml` writes out by hand
-/// (eta_f 0.333333, k_s 16), and `fibre.0.centred` puts bead 0 at that row's [32, 39.5]
+/// the values the C = 0.5 rows of the shape-diagram studies wrote out by hand before they were
+/// given by the groups (eta_f 0.333333, k_s 16), and `fibre.0.centred` puts bead 0 at those
+/// rows' [32, 39.5]
 /// (midpoint x = nx / 2, y = (H - 1) / 2); the
 /// nodes report back the groups asked for; and the same scene given by those keys runs the
 /// same bits.

@@ -367,3 +367,96 @@ fn a_bead_spring_chain_under_spm_bends_like_rollers_and_a_cohesive_beam_as_stoke
     assert!(notes("spm/s2023_fig7_twin.toml").contains("train of rollers"));
     assert!(!notes("spm/s2023_fig7_twin_beam.toml").contains("rollers"));
 }
+
+/// S2023's groups under SPM (coordinator/src/shear_groups.rs, cosim::scene_keys::wall_shear):
+/// `configs/spm/s2023_fig7_twin.toml` gives C = 0.5, Re_ps = 1.5, K = 3.3, K_s = 480 and a
+/// centred fibre, and the gap they are defined on is the rows between the wall slabs,
+/// ny - 2 T. They resolve to the keys the scene used to write out by hand (grid 200 x 168 with
+/// slabs of 4, eta = 2/3, k_b = 4.4, k_s = 128, bead 0 at [64, 83.5]), the nodes report the
+/// groups back to 1e-12, the scene given by those keys runs the same bits, and the same
+/// groups on FPD's `flexible_shear.toml` give the same gap, shear rate, viscosity and
+/// stiffnesses: one scene, two methods.
+#[test]
+fn s2023_groups_give_the_spm_twin_the_flow_of_the_fpd_scene() {
+    let common = ["time.steps=40", "output.interval=20", "analysis.metrics=[]"];
+    let with = |extra: &[String]| -> Vec<String> {
+        common
+            .iter()
+            .map(|s| s.to_string())
+            .chain(extra.iter().cloned())
+            .collect()
+    };
+    let twin = config("spm/s2023_fig7_twin.toml");
+    let a = run_in_process(&twin, &with(&[]), "spm-groups");
+    let d = &a["derived"];
+    let num = |d: &serde_json::Value, k: &str| {
+        d[k].as_f64().unwrap_or_else(|| panic!("derived {k}: {d}"))
+    };
+    let close = |x: f64, want: f64| (x - want).abs() <= 1e-12 * want.abs();
+    assert_eq!(num(d, "fluid.gap"), 160.0);
+    let (eta, kb, ks) = (
+        num(d, "fluid.kinematic_viscosity"),
+        num(d, "fibre.0.bending_stiffness"),
+        num(d, "fibre.0.stretch_stiffness"),
+    );
+    assert!(close(eta, 2.0 / 3.0), "eta = {eta}");
+    assert!(close(kb, 4.4), "k_b = {kb}");
+    assert!(close(ks, 128.0), "k_s = {ks}");
+    assert!(close(num(d, "fluid.confinement"), 0.5));
+    assert!(close(num(d, "fluid.particle_shear_reynolds"), 1.5));
+    assert!(close(num(d, "fibre.0.bending_number"), 3.3));
+    assert!(close(num(d, "fibre.0.stretch_number"), 480.0));
+    let lines = a["groups"].as_array().unwrap();
+    assert_eq!(lines.len(), 2, "{lines:?}");
+    assert!(
+        lines[0].as_str().unwrap().contains("[200, 168]"),
+        "{lines:?}"
+    );
+
+    let by_keys = with(&[
+        "fluid.grid=[200,168]".into(),
+        format!("fluid.viscosity={eta}"),
+        format!("fibre.0.bending_stiffness={kb}"),
+        format!("fibre.0.stretch_stiffness={ks}"),
+        "fibre.0.start=[64.0,83.5,0.0]".into(),
+    ]);
+    run_in_process(&twin, &by_keys, "spm-groups-by-keys");
+    let states =
+        |name: &str| read_topic(&run_dir(name).join("run.mcap"), "/fibre/bead_states").unwrap();
+    let sa = states("spm-groups");
+    assert_eq!(sa.len(), 3);
+    assert_eq!(
+        sa,
+        states("spm-groups-by-keys"),
+        "the scene given by its groups and by its keys ran differently"
+    );
+
+    // The FPD scene with the same groups: the same flow and fibre.
+    let fpd = run_in_process(
+        &config("fpd/flexible_shear.toml"),
+        &with(&[
+            "fluid.grid=[200]".into(),
+            "fluid.confinement=0.5".into(),
+            "fluid.particle_shear_reynolds=1.5".into(),
+            "fibre.0.bending_number=3.3".into(),
+            "fibre.0.stretch_number=480".into(),
+            "fibre.0.centred=true".into(),
+            "time.steps=2".into(),
+        ]),
+        "spm-groups-fpd",
+    );
+    let f = &fpd["derived"];
+    for k in [
+        "fluid.gap",
+        "fluid.shear_rate",
+        "fluid.kinematic_viscosity",
+        "fibre.0.bending_stiffness",
+        "fibre.0.stretch_stiffness",
+        "fibre.0.bending_number",
+        "fibre.0.stretch_number",
+        "fluid.confinement",
+        "fluid.particle_shear_reynolds",
+    ] {
+        assert_eq!(num(d, k), num(f, k), "{k}: spm against fpd-lbm");
+    }
+}

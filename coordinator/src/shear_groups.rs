@@ -1,9 +1,14 @@
 //! S2023's flow groups given in a scene in place of the keys they set (S2023 eq. 18):
 //!
 //! - `fluid.confinement` C = l_c / H sets the gap: `fluid.grid = [nx]` becomes
-//!   `[nx, round(l_c / C)]`;
+//!   `[nx, round(l_c / C + 2 T)]` (2D scenes);
 //! - `fluid.particle_shear_reynolds` Re_ps = rho gamma l_c^2 / (4 eta_f) sets
 //!   `fluid.viscosity` = rho gamma l_c^2 / (4 Re_ps), with gamma = (top - bottom) / H.
+//!
+//! The gap H is the lattice's ny under FPD (T = 0: bounce-back walls at y = -1/2 and
+//! ny - 1/2) and the rows between SPM's wall slabs, ny - 2 T (`walls.thickness` T), so the
+//! same groups give the same flow with either fluid method
+//! ([`cosim::scene_keys::wall_shear`]).
 //!
 //! l_c = N d is fibre 0's contour (`beads` x 2 `bead_radius`), as in the nodes' derived
 //! values. Both groups span the fluid, wall and fibre tables, so they are resolved here, once,
@@ -139,13 +144,11 @@ pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
         return Ok(out);
     }
     let key = if c.is_some() { C } else { RE };
-    if fluid.get("method").and_then(|m| m.as_str()) != Some("fpd-lbm") {
-        return Err(format!(
-            "fluid.{key}: S2023's groups are read for fluid.method = \"fpd-lbm\" (its gap is \
-             the lattice's ny); give fluid.grid and fluid.viscosity instead"
-        ));
-    }
     let lc = contour(scene, key)?;
+    // The rows the walls take: none for FPD (H = ny), two slabs of T for SPM (H = ny - 2 T).
+    let margin = cosim::scene_keys::wall_margin(scene);
+    // `dimensions` is checked by every node; here only a clear 3D is told apart.
+    let two_d = cosim::scene_keys::dimensions(scene).ok().map(|d| d == 2);
     let walls: Option<Vec<f64>> = scene
         .get("walls")
         .and_then(|w| w.get("velocity"))
@@ -160,6 +163,13 @@ pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
         _ => Vec::new(),
     };
     let ny = if let Some(c) = c {
+        if two_d == Some(false) {
+            return Err(
+                "fluid.confinement sets the gap of a 2D scene (S2023 are 2D): a 3D scene gives \
+                 fluid.grid = [nx, ny, nz]"
+                    .into(),
+            );
+        }
         let nx = match grid.as_slice() {
             [nx] if nx.is_integer() => nx.clone(),
             _ => {
@@ -173,7 +183,8 @@ pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
             }
         };
         let exact = lc / c;
-        let h = exact.round();
+        let ny = (exact + margin).round();
+        let h = ny - margin;
         if h < 1.0 {
             return Err(format!(
                 "fluid.confinement = {c}: the gap l_c / C = {exact} is below one lattice node"
@@ -181,11 +192,16 @@ pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
         }
         fluid.insert(
             "grid".into(),
-            toml::Value::Array(vec![nx.clone(), toml::Value::Integer(h as i64)]),
+            toml::Value::Array(vec![nx.clone(), toml::Value::Integer(ny as i64)]),
         );
         fluid.remove(C);
+        let gap = if margin > 0.0 {
+            format!("H = ny - 2 T = {h} = l_c / C")
+        } else {
+            "H = ny = l_c / C".to_string()
+        };
         out.lines.push(format!(
-            "fluid.confinement = {c} -> fluid.grid = [{nx}, {h}] (H = l_c / C, l_c = {lc})"
+            "fluid.confinement = {c} -> fluid.grid = [{nx}, {ny}] ({gap}, l_c = {lc})"
         ));
         if (h - exact).abs() > 1e-9 * exact {
             out.notes.push(format!(
@@ -197,9 +213,12 @@ pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
         h
     } else {
         match grid.as_slice() {
-            [_, ny] => number(Some(ny))
+            [_, ny, ..] => number(Some(ny))
+                .map(|ny| ny - margin)
                 .filter(|h| *h > 0.0)
-                .ok_or("fluid.grid: expected [nx, ny] with positive sizes")?,
+                .ok_or(
+                    "fluid.grid: expected [nx, ny] with positive sizes and a gap between the walls",
+                )?,
             _ => {
                 return Err(
                     "fluid.particle_shear_reynolds needs the gap: fluid.grid = [nx, ny], or \
@@ -285,6 +304,32 @@ bead_radius = 4.0
         assert!(!fluid.contains_key("particle_shear_reynolds"));
         assert_eq!(r.lines.len(), 2);
         assert!(r.notes.is_empty(), "{:?}", r.notes);
+    }
+
+    /// Under SPM the gap is the rows between the wall slabs (H = ny - 2 T): the same groups
+    /// give `configs/spm/s2023_fig7_twin.toml`'s 200 x 168 grid with slabs of 4 and FPD's
+    /// viscosity 2/3; slabs of 2.5 make a gap of 160 in 165 rows, and C = 0.87 rounds the
+    /// rows, not the gap, to whole nodes (ny = 100, H = 92, as FPD's).
+    #[test]
+    fn spm_groups_count_the_gap_between_the_wall_slabs() {
+        let spm = FIG7.replace("fpd-lbm", "spm");
+        let mut t = table(&spm);
+        let r = resolve(&mut t).unwrap();
+        assert_eq!(t["fluid"]["grid"][1].as_integer(), Some(168));
+        let eta = t["fluid"]["viscosity"].as_float().unwrap();
+        assert!((eta - 2.0 / 3.0).abs() < 1e-15, "{eta}");
+        assert!(r.lines[0].contains("ny - 2 T = 160"), "{}", r.lines[0]);
+        assert!(r.notes.is_empty(), "{:?}", r.notes);
+        let mut t = table(&spm.replace("0.05]\n", "0.05]\nthickness = 2.5\n"));
+        resolve(&mut t).unwrap();
+        assert_eq!(t["fluid"]["grid"][1].as_integer(), Some(165));
+        let mut t = table(&spm.replace("0.5\n", "0.87\n"));
+        let r = resolve(&mut t).unwrap();
+        assert_eq!(t["fluid"]["grid"][1].as_integer(), Some(100));
+        assert!(r.notes[0].contains("rounded to 92"), "{}", r.notes[0]);
+        let eta = t["fluid"]["viscosity"].as_float().unwrap();
+        let want = 0.1 / 92.0 * 6400.0 / 6.0;
+        assert!((eta - want).abs() < 1e-15 * want, "{eta} vs {want}");
     }
 
     /// S2023's C = 0.87 at l_c = 80: H = 91.95 rounds to 92, C = 0.869565.
@@ -398,8 +443,8 @@ bead_radius = 4.0
         assert!(e.contains("grid = [nx]"), "{e}");
         let e = err(&FIG7.replace("[fluid]\n", "[fluid]\nviscosity = 1.0\n"));
         assert!(e.contains("not both"), "{e}");
-        let e = err(&FIG7.replace("fpd-lbm", "spm"));
-        assert!(e.contains("fpd-lbm"), "{e}");
+        let e = err(&FIG7.replace("dimensions = 2", "dimensions = 3"));
+        assert!(e.contains("2D"), "{e}");
         let e = err(&FIG7.replace("[-0.05, 0.05]", "[0.05, 0.05]"));
         assert!(e.contains("shear"), "{e}");
         let e = err(&FIG7.replace("beads = 10\n", ""));

@@ -107,3 +107,120 @@ pub fn time_step(table: &toml::Table) -> Result<f64, String> {
         Some(v) => Err(format!("time: expected a table, got {}", describe_value(v))),
     }
 }
+
+/// Default `walls.thickness` of the SPM wall slabs, grid units.
+pub const DEFAULT_WALL_THICKNESS: f64 = 4.0;
+
+/// The plane Couette flow a scene's walls drive, read where S2023's groups are defined on it
+/// (C = l_c / H, Re_ps, K, K_s; S2023 eq. 18 and section II C).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WallShear {
+    /// Fluid gap H between the walls (grid units): see [`wall_margin`].
+    pub gap: f64,
+    /// Shear rate gamma = |top - bottom| / H (1 / time).
+    pub shear_rate: f64,
+    /// Wall speed V0 = |top - bottom| / 2 (S2023 section IV A: walls at -V0 and V0).
+    pub wall_speed: f64,
+}
+
+/// How much of the grid's `ny` the walls take, `ny - H`: nothing for `fluid.method =
+/// "fpd-lbm"` (bounce-back walls at y = -1/2 and ny - 1/2), two slabs of `walls.thickness`
+/// (default [`DEFAULT_WALL_THICKNESS`]) for SPM. Read, not validated: the fluid node checks
+/// these keys itself.
+pub fn wall_margin(table: &toml::Table) -> f64 {
+    let fpd = table
+        .get("fluid")
+        .and_then(|f| f.get("method"))
+        .and_then(|m| m.as_str())
+        == Some("fpd-lbm");
+    if fpd {
+        return 0.0;
+    }
+    let thickness = table
+        .get("walls")
+        .and_then(|w| w.get("thickness"))
+        .and_then(number)
+        .unwrap_or(DEFAULT_WALL_THICKNESS);
+    2.0 * thickness
+}
+
+/// A TOML number, integer or float.
+fn number(v: &toml::Value) -> Option<f64> {
+    v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
+}
+
+/// The scene's [`WallShear`], or a message saying which key `need` (the key asking for it,
+/// e.g. `fibre.0.bending_number`) is missing. Read, not validated, as [`wall_margin`].
+pub fn wall_shear(table: &toml::Table, need: &str) -> Result<WallShear, String> {
+    let ny = table
+        .get("fluid")
+        .and_then(|f| f.get("grid"))
+        .and_then(|g| g.as_array())
+        .and_then(|g| g.get(1))
+        .and_then(number)
+        .ok_or(format!(
+            "{need} needs fluid.grid = [nx, ny] (the gap between the walls)"
+        ))?;
+    let margin = wall_margin(table);
+    let gap = ny - margin;
+    if !(gap > 0.0) {
+        return Err(format!(
+            "{need} needs a fluid gap between the walls: fluid.grid's ny = {ny} leaves {gap}"
+        ));
+    }
+    let walls = table
+        .get("walls")
+        .and_then(|w| w.get("velocity"))
+        .and_then(|v| v.as_array())
+        .map(|v| v.iter().filter_map(number).collect::<Vec<_>>());
+    match walls.as_deref() {
+        Some([b, t]) if t != b && (t - b).is_finite() => Ok(WallShear {
+            gap,
+            shear_rate: (t - b).abs() / gap,
+            wall_speed: 0.5 * (t - b).abs(),
+        }),
+        _ => Err(format!(
+            "{need} needs a shear: walls.velocity = [bottom, top] with different speeds"
+        )),
+    }
+}
+
+#[cfg(test)]
+mod wall_shear_tests {
+    use super::*;
+
+    const SPM: &str =
+        "[fluid]\nmethod = \"spm\"\ngrid = [200, 168]\n[walls]\nvelocity = [-0.05, 0.05]\n";
+
+    /// The same gap of 160 as FPD's 160-node lattice and SPM's 168 rows less two slabs of 4.
+    #[test]
+    fn the_gap_is_the_lattice_for_fpd_and_the_rows_between_the_slabs_for_spm() {
+        let spm = parse_table(SPM).unwrap();
+        let fpd =
+            parse_table(&SPM.replace("\"spm\"", "\"fpd-lbm\"").replace("168", "160")).unwrap();
+        for t in [&spm, &fpd] {
+            let s = wall_shear(t, "k").unwrap();
+            assert_eq!(s.gap, 160.0);
+            assert_eq!(s.wall_speed, 0.05);
+            assert!((s.shear_rate - 0.1 / 160.0).abs() < 1e-18);
+        }
+        assert_eq!(wall_margin(&spm), 8.0);
+        assert_eq!(wall_margin(&fpd), 0.0);
+        let thick = parse_table(&format!("{SPM}thickness = 9\n")).unwrap();
+        assert_eq!(wall_shear(&thick, "k").unwrap().gap, 150.0);
+    }
+
+    #[test]
+    fn a_missing_shear_or_gap_is_named() {
+        let still = parse_table(&SPM.replace("-0.05", "0.05")).unwrap();
+        assert!(wall_shear(&still, "fibre.0.bending_number")
+            .unwrap_err()
+            .contains("fibre.0.bending_number needs a shear"));
+        let flat = parse_table(&SPM.replace("[200, 168]", "[200]")).unwrap();
+        assert!(wall_shear(&flat, "k")
+            .unwrap_err()
+            .contains("fluid.grid = [nx, ny]"));
+        let thin = parse_table(&SPM.replace("168", "8")).unwrap();
+        assert!(wall_shear(&thin, "k").unwrap_err().contains("leaves 0"));
+    }
+}

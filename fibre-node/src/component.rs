@@ -245,8 +245,8 @@ impl Component for FibreComponent {
                 param("fibre.N.stretch_stiffness", "mass length^2 / time^2", Some("E pi r^2 l0"), "bead-spring k_s (spring stiffness k_s / l0^2)"),
                 param("fibre.N.bending_stiffness", "mass length^2 / time^2", Some("E I / l0"), "bead-spring k_b (U_b = -k_b sum t_i+1 . t_i)"),
                 param("fibre.N.affinity", "1", Some("0.0"), "wetting affinity psi0 of the fibre (read by the fluid node)"),
-                param("fibre.N.bending_number", "1", Some("none"), "bead-spring under fpd-lbm: bending number K = 2 k_b / (eta_f gamma l_c^2) (S2023 eq. 18), converted to k_b with fluid.viscosity, the wall shear gamma = (top - bottom) / ny and l_c = N d; excludes bending_stiffness"),
-                param("fibre.N.stretch_number", "1", Some("none"), "bead-spring under fpd-lbm: stretch number K_s = k_s / (eta_f V0 l0) (S2023 section II C), converted to k_s with fluid.viscosity, the wall speed V0 = |top - bottom| / 2 and l0 = spacing; excludes stretch_stiffness; reported for every bead-spring fibre in a wall shear"),
+                param("fibre.N.bending_number", "1", Some("none"), "bead-spring in a wall shear (fpd-lbm or spm): bending number K = 2 k_b / (eta_f gamma l_c^2) (S2023 eq. 18), converted to k_b with fluid.viscosity, the wall shear gamma = (top - bottom) / H (H = ny under fpd-lbm, ny - 2 T between the spm slabs) and l_c = N d; excludes bending_stiffness; reported for every bead-spring fibre in a wall shear"),
+                param("fibre.N.stretch_number", "1", Some("none"), "bead-spring in a wall shear (fpd-lbm or spm): stretch number K_s = k_s / (eta_f V0 l0) (S2023 section II C), converted to k_s with fluid.viscosity, the wall speed V0 = |top - bottom| / 2 and l0 = spacing; excludes stretch_stiffness; reported for every bead-spring fibre in a wall shear"),
                 param("fibre.N.exchange", "1", Some("\"explicit\""), "SPM momentum exchange: \"explicit\" (the fluid's impulse added as it comes, L2020 eqs. 35-36; beads must be at least half as heavy as their profile's fluid) or \"implicit\" (the same impulse taken as a drag towards the profile's fluid velocity at the new bead velocity: momentum-conserving with the penalty, stable for light beads and stiff fibres)"),
                 param("fibre.N.bead_inertia", "1", Some("\"solid\""), "bead moment of inertia: \"solid\" (sharp disc or sphere, as fibre.N.density says) or \"profile\" (density times the moment of the bead's smoothed profile, SPM only); under SPM a bead whose profile fluid has 2 or more times its mass or moment of inertia is refused (explicit exchange limit)"),
                 param("fibre.N.beam_forces", "1", Some("\"paper\""), "cohesive beam: \"paper\" (L2020 eqs. 11-24) or \"energy-consistent\" (the same to leading order, exactly conservative to third order in the bead angles)"),
@@ -434,6 +434,13 @@ impl Component for FibreComponent {
             match &f.model {
                 Model::CohesiveBeam(b) => {
                     derived.push((format!("{p}.axial_stiffness"), b.axial));
+                    if let Some(shear) = scene.shear_flow {
+                        // S2023's K with the chain's k_b = E I / l0 (bead_spring.rs), so that a
+                        // beam and a bead-spring chain of the same rigidity report one K.
+                        let kb = f.bending_rigidity() / cfg.spacing;
+                        let k = FibreGroup::Bending.of(kb, shear, cfg);
+                        derived.push((format!("{p}.bending_number"), k));
+                    }
                     if !f.planar {
                         derived.push((format!("{p}.torsional_rigidity"), b.twist * b.rest_length));
                     }
@@ -441,7 +448,7 @@ impl Component for FibreComponent {
                 Model::BeadSpring(b) => {
                     derived.push((format!("{p}.stretch_stiffness"), b.k_s));
                     derived.push((format!("{p}.bending_stiffness"), b.k_b));
-                    if let Some(shear) = scene.fpd_shear {
+                    if let Some(shear) = scene.shear_flow {
                         // S2023 eq. 18, K = 2 k_b / (eta_f gamma l_c^2), and section II C,
                         // K_s = k_s / (eta_f V0 l0), however the stiffnesses were given.
                         let k = FibreGroup::Bending.of(b.k_b, shear, cfg);

@@ -106,7 +106,7 @@ pub struct SceneConfig {
     /// node's defaults), which sizes the fluid a bead exchanges momentum with.
     pub spm_profile: Option<SmoothedProfile>,
     /// Under FPD with sheared walls: the shear S2023's groups are defined on.
-    pub fpd_shear: Option<FpdShear>,
+    pub shear_flow: Option<ShearFlow>,
     pub fibres: Vec<FibreConfig>,
 }
 
@@ -349,8 +349,8 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         fluid_density,
         fpd_interface_ratio,
         spm_profile,
-        fpd_shear: (coupling == Coupling::Fpd)
-            .then(|| fpd_shear(&table, "").ok())
+        shear_flow: (coupling != Coupling::None)
+            .then(|| shear_flow(&table, "").ok())
             .flatten(),
         fibres,
     })
@@ -361,50 +361,33 @@ fn toml_number(v: &toml::Value) -> Option<f64> {
     v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
 }
 
-/// The FPD shear S2023's fibre groups are defined on: `eta_f = fluid.viscosity`, the wall
-/// shear `gamma = (top - bottom) / H` for walls at `y = -1/2` and `ny - 1/2` (`H = ny`) and
-/// the wall speed `V0 = |top - bottom| / 2` (S2023 section IV A: walls at `-V0` and `V0`).
+/// The sheared fluid S2023's fibre groups are defined on: `eta_f = fluid.viscosity` and the
+/// walls' plane Couette flow ([`cosim::scene_keys::WallShear`]): the shear rate
+/// `gamma = |top - bottom| / H` and the wall speed `V0 = |top - bottom| / 2`, where the gap
+/// `H` is the lattice's `ny` under FPD and `ny - 2 T` between SPM's slabs.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FpdShear {
+pub struct ShearFlow {
     pub viscosity: f64,
     pub shear_rate: f64,
     pub wall_speed: f64,
 }
 
-/// [`FpdShear`] of a scene, or a message saying which key `need` (the fibre key asking, e.g.
+/// [`ShearFlow`] of a scene, or a message saying which key `need` (the fibre key asking, e.g.
 /// `fibre.0.bending_number`) is missing. The fluid node validates these keys itself; here
 /// they are only read.
-pub fn fpd_shear(table: &toml::Table, need: &str) -> Result<FpdShear, String> {
-    let fluid = table.get("fluid").and_then(|f| f.as_table());
-    let ny = fluid
-        .and_then(|f| f.get("grid"))
-        .and_then(|g| g.as_array())
-        .and_then(|g| g.get(1))
-        .and_then(toml_number)
-        .filter(|h| *h > 0.0)
-        .ok_or(format!(
-            "{need} needs fluid.grid = [nx, ny] (the gap H = ny)"
-        ))?;
-    let viscosity = fluid
+pub fn shear_flow(table: &toml::Table, need: &str) -> Result<ShearFlow, String> {
+    let viscosity = table
+        .get("fluid")
         .and_then(|f| f.get("viscosity"))
         .and_then(toml_number)
         .filter(|e| *e > 0.0)
         .ok_or(format!("{need} needs a positive fluid.viscosity (eta_f)"))?;
-    let walls = table
-        .get("walls")
-        .and_then(|w| w.get("velocity"))
-        .and_then(|v| v.as_array())
-        .map(|v| v.iter().filter_map(toml_number).collect::<Vec<_>>());
-    match walls.as_deref() {
-        Some([b, t]) if t != b => Ok(FpdShear {
-            viscosity,
-            shear_rate: (t - b).abs() / ny,
-            wall_speed: 0.5 * (t - b).abs(),
-        }),
-        _ => Err(format!(
-            "{need} needs a shear: walls.velocity = [bottom, top] with different speeds"
-        )),
-    }
+    let walls = cosim::scene_keys::wall_shear(table, need)?;
+    Ok(ShearFlow {
+        viscosity,
+        shear_rate: walls.shear_rate,
+        wall_speed: walls.wall_speed,
+    })
 }
 
 /// `start` for a fibre whose midpoint lies at the centre of the gap between the walls, as
@@ -455,7 +438,7 @@ impl FibreGroup {
     }
 
     /// The stiffness for the group's value `x`, with l_c = N d and l0 the bond's rest length.
-    fn stiffness(self, x: f64, shear: FpdShear, f: &FibreConfig) -> f64 {
+    fn stiffness(self, x: f64, shear: ShearFlow, f: &FibreConfig) -> f64 {
         match self {
             Self::Bending => {
                 let lc = f.beads as f64 * 2.0 * f.bead_radius;
@@ -466,12 +449,12 @@ impl FibreGroup {
     }
 
     /// The group a stiffness gives (the inverse of [`Self::stiffness`]).
-    pub fn of(self, stiffness: f64, shear: FpdShear, f: &FibreConfig) -> f64 {
+    pub fn of(self, stiffness: f64, shear: ShearFlow, f: &FibreConfig) -> f64 {
         stiffness / self.stiffness(1.0, shear, f)
     }
 }
 
-/// `k_b` or `k_s` from S2023's group (K or K_s) on the scene's FPD shear ([`fpd_shear`]),
+/// `k_b` or `k_s` from S2023's group (K or K_s) on the scene's wall shear ([`shear_flow`]),
 /// with `l_c = N d`.
 fn stiffness_from_group(
     table: &toml::Table,
@@ -497,17 +480,17 @@ fn stiffness_from_group(
             "{p}.{key}: give either {key} ({name}) or {stiffness_key}, not both"
         ));
     }
-    if coupling != Coupling::Fpd {
+    if coupling == Coupling::None {
         return Err(format!(
-            "{p}.{key}: {} is converted with the FPD shear rate and viscosity, so it needs \
-             fluid.method = \"fpd-lbm\"; give {p}.{stiffness_key} instead",
+            "{p}.{key}: {} is converted with the fluid's viscosity and the walls' shear, so it \
+             needs a [fluid] between walls; give {p}.{stiffness_key} instead",
             name.split(',').next().unwrap_or(key)
         ));
     }
     if !(x.is_finite() && x > 0.0) {
         return Err(format!("{p}.{key}: expected a positive number, got {x}"));
     }
-    let shear = fpd_shear(table, &format!("{p}.{key}"))?;
+    let shear = shear_flow(table, &format!("{p}.{key}"))?;
     Ok(group.stiffness(x, shear, f))
 }
 
@@ -807,6 +790,42 @@ youngs_modulus = 1.0
         assert!((kb - 2.64).abs() < 1e-12, "{kb}");
     }
 
+    /// Under SPM the gap is the rows between the wall slabs, ny - 2 T: a 200 x 168 grid with
+    /// the default slabs of 4 has FPD's gap of 160, so the same K and K_s give the same k_b
+    /// and k_s; thicker slabs, a narrower gap and a larger shear rate.
+    #[test]
+    fn the_groups_read_the_gap_between_the_spm_slabs() {
+        let spm = FPD_SHEAR
+            .replace("\"fpd-lbm\"", "\"spm\"")
+            .replace("[200, 160]", "[200, 168]");
+        let fpd = parse_scene(&format!(
+            "{FPD_SHEAR}bending_number = 3.3\nstretch_number = 480\n"
+        ))
+        .unwrap();
+        let s = parse_scene(&format!(
+            "{spm}bending_number = 3.3\nstretch_number = 480\n"
+        ))
+        .unwrap();
+        assert_eq!(s.coupling, Coupling::Spm);
+        assert_eq!(s.shear_flow, fpd.shear_flow);
+        assert_eq!(
+            s.fibres[0].bending_stiffness,
+            fpd.fibres[0].bending_stiffness
+        );
+        assert_eq!(
+            s.fibres[0].stretch_stiffness,
+            fpd.fibres[0].stretch_stiffness
+        );
+        let thick = spm.replace(
+            "velocity = [-0.04, 0.04]",
+            "velocity = [-0.04, 0.04]\nthickness = 24",
+        );
+        let s = parse_scene(&format!("{thick}bending_number = 3.3\n")).unwrap();
+        let kb = s.fibres[0].bending_stiffness.unwrap();
+        // gap 120: k_b = 3.3 x 0.5 x (0.08 / 120) x 6400 / 2
+        assert!((kb - 3.52).abs() < 1e-12, "{kb}");
+    }
+
     /// S2023 section II C inverted: k_s = K_s eta_f V0 l0 with V0 = 0.04 (walls at -+0.04) and
     /// l0 = d = 8: K_s = 480 gives k_s = 480 x 0.5 x 0.04 x 8 = 76.8; the scene's shear is
     /// kept for the reported groups.
@@ -815,7 +834,7 @@ youngs_modulus = 1.0
         let s = parse_scene(&format!("{FPD_SHEAR}stretch_number = 480\n")).unwrap();
         let ks = s.fibres[0].stretch_stiffness.unwrap();
         assert!((ks - 76.8).abs() < 1e-12, "{ks}");
-        let shear = s.fpd_shear.unwrap();
+        let shear = s.shear_flow.unwrap();
         assert_eq!(shear.wall_speed, 0.04);
         assert!((shear.shear_rate - 0.08 / 160.0).abs() < 1e-18);
         let back = FibreGroup::Stretch.of(ks, shear, &s.fibres[0]);
@@ -824,11 +843,6 @@ youngs_modulus = 1.0
             "{FPD_SHEAR}stretch_number = 480\nstretch_stiffness = 1.0\n"
         ));
         assert!(e.contains("give either stretch_number"), "{e}");
-        let e = err(&(FPD_SHEAR.replace("\"fpd-lbm\"", "\"spm\"") + "stretch_number = 4\n"));
-        assert!(
-            e.contains("fibre.0.stretch_number") && e.contains("fpd-lbm"),
-            "{e}"
-        );
         let e = err(&with("stretch_number = 4\n"));
         assert!(e.contains("only the bead-spring model"), "{e}");
     }
@@ -867,8 +881,10 @@ youngs_modulus = 1.0
                 "needs a shear",
             ),
             (
-                FPD_SHEAR.replace("\"fpd-lbm\"", "\"spm\"") + "bending_number = 3.3\n",
-                "needs fluid.method = \"fpd-lbm\"",
+                "dimensions = 2\n[time]\ndt = 1.0\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = 10\n\
+                 bead_radius = 4.0\nyoungs_modulus = 1.0\nbending_number = 3.3\n"
+                    .to_string(),
+                "needs a [fluid] between walls",
             ),
             (
                 with("bending_number = 3.3\n[fluid]\nmethod = \"fpd-lbm\""),

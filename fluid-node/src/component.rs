@@ -427,8 +427,8 @@ impl Component for FluidComponent {
                 param("fluid.viscosity_ratio", "1", Some("100"), "fpd-lbm: r_eta = eta_s / eta_f (S2023 eq. 1)"),
                 param("fluid.interface_ratio", "1", Some("0.125"), "fpd-lbm: r_xi = xi / d of the bead profile (S2023 eq. 2)"),
                 param("fluid.profile_cutoff", "1", Some("5"), "fpd-lbm: profile cut-off in interface thicknesses xi"),
-                param("fluid.confinement", "1", None, "fpd-lbm: C = l_c / H (S2023 eq. 18, l_c = N d of fibre 0) in place of the gap: fluid.grid = [nx] becomes [nx, round(l_c / C)] (resolved by the coordinator before the nodes are configured; a rounded gap gets a note)"),
-                param("fluid.particle_shear_reynolds", "1", None, "fpd-lbm: Re_ps = rho gamma l_c^2 / (4 eta_f) (S2023 eq. 18) in place of fluid.viscosity, gamma = (top - bottom) / H (resolved by the coordinator)"),
+                param("fluid.confinement", "1", None, "2D, with walls: C = l_c / H (S2023 eq. 18, l_c = N d of fibre 0) in place of the gap: fluid.grid = [nx] becomes [nx, round(l_c / C + 2 T)], H = ny under fpd-lbm (T = 0) and ny - 2 T between the spm wall slabs (resolved by the coordinator before the nodes are configured; a rounded gap gets a note)"),
+                param("fluid.particle_shear_reynolds", "1", None, "with walls: Re_ps = rho gamma l_c^2 / (4 eta_f) (S2023 eq. 18) in place of fluid.viscosity, gamma = (top - bottom) / H (resolved by the coordinator)"),
                 param("fluid.solid_layers", "1", None, "fpd-lbm, table {thickness, interface}: S2023's Couette sandwich (eq. 14), a layer of the solid viscosity on each wall (no fibres)"),
                 param("fluid.stream", "1", None, "fpd-lbm, table {velocity, sponge, sponge_rate}: a uniform stream U along x past held beads (S2023 Fig. 4); walls, if any, slide at U"),
                 param("fluid.stream.velocity", "length / time", None, "stream speed U (lattice units; |U| sqrt 3 <= 0.3)"),
@@ -645,7 +645,14 @@ impl Component for FluidComponent {
                 cfg.density * gamma.abs() * l * l / cfg.viscosity,
             ));
             if let Some(f) = cfg.fibres.first() {
-                derived.push(("fluid.confinement".into(), f.length() / w.gap));
+                // S2023 eq. 18 with l_c = N d (the fibre's length for touching beads) and H the
+                // gap between the slabs, as the FPD fluid reports them.
+                let lc = f.beads as f64 * 2.0 * f.bead_radius;
+                derived.push(("fluid.confinement".into(), lc / w.gap));
+                derived.push((
+                    "fluid.particle_shear_reynolds".into(),
+                    cfg.density * gamma.abs() * lc * lc / (4.0 * cfg.viscosity),
+                ));
                 if let Some(e) = f.youngs_modulus {
                     if gamma != 0.0 {
                         // k0 = pi r_b E / 2 with L0 = 1 (grid units).

@@ -13,8 +13,8 @@ use serde::Deserialize;
 /// Default `fluid.density`.
 pub const DEFAULT_DENSITY: f64 = 1.0;
 pub use cosim::profile::{DEFAULT_CUTOFF_OVER_XI, DEFAULT_XI};
-/// Default `walls.thickness`, grid units.
-pub const DEFAULT_WALL_THICKNESS: f64 = 4.0;
+/// Default `walls.thickness`, grid units (shared with the nodes that read the gap).
+pub use cosim::scene_keys::DEFAULT_WALL_THICKNESS;
 /// Smallest grid size along any axis.
 pub const MIN_GRID: i64 = 8;
 /// Largest number of grid cells accepted (512³).

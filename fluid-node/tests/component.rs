@@ -66,6 +66,9 @@ fn configure_reports_effects_limits_and_derived_numbers() {
     assert!((derived("fluid.shear_rate") - gamma).abs() < 1e-15);
     assert!((derived("fluid.reynolds") - gamma * 18.0 * 18.0).abs() < 1e-12);
     assert!((derived("fluid.confinement") - 18.0 / 32.0).abs() < 1e-15);
+    // S2023 eq. 18: Re_ps = rho gamma l_c^2 / (4 eta), a quarter of the Reynolds number on l_c.
+    let re_ps = derived("fluid.particle_shear_reynolds");
+    assert!((re_ps - derived("fluid.reynolds") / 4.0).abs() < 1e-15);
     let k0 = std::f64::consts::PI * 3.0 * 100.0 / 2.0;
     assert!((derived("fluid.k0_over_l0_eta_gamma") - k0 / gamma).abs() < 1e-6);
     assert_eq!(derived("fluid.spm_diffusion_number"), 0.5);
