@@ -380,13 +380,7 @@ fn s2023_groups_set_the_keys_they_stand_for() {
         "output.interval=500",
         "analysis.metrics=[]",
     ];
-    let with = |extra: &[String]| -> Vec<String> {
-        common
-            .iter()
-            .map(|s| s.to_string())
-            .chain(extra.iter().cloned())
-            .collect()
-    };
+    let with = |extra: &[String]| overrides(&common, extra);
     let groups = with(&[
         "fluid.grid=[100]".into(),
         "fluid.confinement=0.5".into(),

@@ -379,13 +379,7 @@ fn a_bead_spring_chain_under_spm_bends_like_rollers_and_a_cohesive_beam_as_stoke
 #[test]
 fn s2023_groups_give_the_spm_twin_the_flow_of_the_fpd_scene() {
     let common = ["time.steps=40", "output.interval=20", "analysis.metrics=[]"];
-    let with = |extra: &[String]| -> Vec<String> {
-        common
-            .iter()
-            .map(|s| s.to_string())
-            .chain(extra.iter().cloned())
-            .collect()
-    };
+    let with = |extra: &[String]| overrides(&common, extra);
     let twin = config("spm/s2023_fig7_twin.toml");
     let a = run_in_process(&twin, &with(&[]), "spm-groups");
     let d = &a["derived"];

@@ -147,6 +147,55 @@ impl Vary {
             })
             .collect()
     }
+
+    /// The keys that label this entry's rows: the first, then, while two rows still read
+    /// alike, the next key that tells the most of them apart (a key that follows another,
+    /// such as the steps that follow a gap, adds nothing and is left out).
+    fn label_keys(&self, i: usize) -> Result<Vec<String>, String> {
+        let rows = self.assignments(i)?;
+        let Some(first) = rows.first() else {
+            return Ok(Vec::new());
+        };
+        let all: Vec<&String> = first.iter().map(|(k, _)| k).collect();
+        let distinct = |keys: &[&String]| {
+            let mut seen: Vec<String> = rows
+                .iter()
+                .map(|r| {
+                    r.iter()
+                        .filter(|(k, _)| keys.contains(&k))
+                        .map(|(_, v)| toml_inline(v))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                })
+                .collect();
+            seen.sort();
+            seen.dedup();
+            seen.len()
+        };
+        let mut chosen = vec![all[0]];
+        while distinct(&chosen) < rows.len() {
+            let with = |k: &String| {
+                let mut c = chosen.clone();
+                c.push(k);
+                distinct(&c)
+            };
+            // The most rows told apart; the earliest key on a tie.
+            let best = all
+                .iter()
+                .enumerate()
+                .filter(|(_, k)| !chosen.contains(k))
+                .max_by_key(|(j, k)| (with(k), std::cmp::Reverse(*j)));
+            match best {
+                Some((_, k)) if with(k) > distinct(&chosen) => chosen.push(k),
+                _ => break,
+            }
+        }
+        Ok(all
+            .into_iter()
+            .filter(|k| chosen.contains(k))
+            .cloned()
+            .collect())
+    }
 }
 
 /// One row of the study's table.
@@ -351,6 +400,13 @@ fn prepare(study: &Study, scene_path: &Path) -> Result<Vec<Variant>, String> {
         .iter()
         .map(|(k, v)| format!("{k}={}", toml_inline(v)))
         .collect();
+    let label_keys: Vec<String> = study
+        .vary
+        .iter()
+        .enumerate()
+        .map(|(i, v)| v.label_keys(i))
+        .collect::<Result<Vec<_>, _>>()?
+        .concat();
     let mut prepared = Vec::with_capacity(variants.len());
     for (i, assignment) in variants.iter().enumerate() {
         let mut overrides = fixed.clone();
@@ -359,15 +415,10 @@ fn prepare(study: &Study, scene_path: &Path) -> Result<Vec<Variant>, String> {
                 .iter()
                 .map(|(k, v)| format!("{k}={}", toml_inline(v))),
         );
-        // Label a variant by the first key of each [[vary]] entry; the others follow it.
+        // Label a variant by the keys that tell each [[vary]] entry's rows apart.
         let label = assignment
             .iter()
-            .filter(|(k, _)| {
-                study
-                    .vary
-                    .iter()
-                    .any(|v| v.key.as_ref() == Some(k) || v.keys.first() == Some(k))
-            })
+            .filter(|(k, _)| label_keys.contains(k))
             .map(|(k, v)| format!("{}={}", k.rsplit('.').next().unwrap_or(k), toml_inline(v)))
             .collect::<Vec<_>>()
             .join(" ");
@@ -716,6 +767,27 @@ mod tests {
 
     /// A `[curve]` adds its abscissa as a column of the table and as the CSV's last column;
     /// without one both keep their usual columns.
+    #[test]
+    fn a_variant_is_labelled_by_the_keys_that_tell_its_rows_apart() {
+        let vary = |text: &str| -> Vary { toml::from_str(text).unwrap() };
+        // fpd_critical_points: the gap alone repeats at C = 0.2, the Reynolds number tells
+        // those rows apart, and the steps follow the gap.
+        let v = vary(
+            "keys = [\"fluid.confinement\", \"fluid.particle_shear_reynolds\", \"time.steps\"]\n\
+             values = [[0.5, 1.5, 48000], [0.55, 1.5, 43800], [0.2, 1.0, 120000], [0.2, 2.0, 120000]]",
+        );
+        assert_eq!(
+            v.label_keys(0).unwrap(),
+            ["fluid.confinement", "fluid.particle_shear_reynolds"]
+        );
+        let v = vary(
+            "keys = [\"fluid.confinement\", \"time.steps\"]\nvalues = [[0.3, 79800], [0.5, 48000]]",
+        );
+        assert_eq!(v.label_keys(0).unwrap(), ["fluid.confinement"]);
+        let v = vary("key = \"fibre.0.bending_number\"\nvalues = [3.3, 3.3]");
+        assert_eq!(v.label_keys(0).unwrap(), ["fibre.0.bending_number"]);
+    }
+
     #[test]
     fn a_curve_adds_its_abscissa_to_the_table_and_the_csv() {
         let mut r = row(8.0, 0.25);

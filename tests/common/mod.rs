@@ -35,6 +35,15 @@ pub fn out_dir(test: &str) -> PathBuf {
 }
 
 /// Run a scene in-process through the coordinator library; returns summary.json.
+/// `--set` overrides: the `common` ones, then `extra`.
+pub fn overrides(common: &[&str], extra: &[String]) -> Vec<String> {
+    common
+        .iter()
+        .map(|s| s.to_string())
+        .chain(extra.iter().cloned())
+        .collect()
+}
+
 pub fn run_in_process(cfg: &Path, overrides: &[String], test: &str) -> serde_json::Value {
     let scene = scene::load(Some(cfg), overrides).unwrap_or_else(|e| panic!("{e}"));
     let opts = RunOptions::quiet(out_dir(test), true);
