@@ -211,6 +211,36 @@ mod tests {
         assert!((f[n - 1] - fnn).norm() < tol);
     }
 
+    /// S2023's K -> 0, a freely jointed chain: bent at every joint with its bonds at rest, it
+    /// stores nothing and feels no force with k_b = 0, and is pulled straight with k_b > 0.
+    #[test]
+    fn a_freely_jointed_chain_keeps_its_bends() {
+        let l0 = 2.0;
+        let x: Vec<Vec3> = (0..6)
+            .scan(Vec3::zeros(), |p, i| {
+                let here = *p;
+                let a: f64 = if i % 2 == 0 { 0.6 } else { -0.4 };
+                *p += Vec3::new(a.cos(), a.sin(), 0.0) * l0;
+                Some(here)
+            })
+            .collect();
+        for (kb, bent) in [(0.0, false), (0.5, true)] {
+            let model = BeadSpring {
+                rest_length: l0,
+                k_s: 3.0,
+                k_b: kb,
+            };
+            let mut f = vec![Vec3::zeros(); x.len()];
+            let e = model.add_chain_forces(&x, &mut f);
+            let largest = f.iter().map(|v| v.norm()).fold(0.0, f64::max);
+            assert_eq!(largest > 1e-3, bent, "k_b {kb}: largest force {largest}");
+            assert_eq!(e.total() > 1e-3, bent, "k_b {kb}: energy {}", e.total());
+            if !bent {
+                assert!(largest < 1e-12 && e.total().abs() < 1e-12);
+            }
+        }
+    }
+
     #[test]
     fn modulus_mapping() {
         let m = BeadSpring::from_modulus(2.0, 0.5, 1.0);

@@ -487,8 +487,16 @@ fn stiffness_from_group(
             name.split(',').next().unwrap_or(key)
         ));
     }
-    if !(x.is_finite() && x > 0.0) {
-        return Err(format!("{p}.{key}: expected a positive number, got {x}"));
+    // K = 0 is S2023's freely jointed limit (section IV A: 0 <= K < infinity); a bond needs
+    // a stiffness.
+    match group {
+        FibreGroup::Bending if !(x.is_finite() && x >= 0.0) => {
+            return Err(format!("{p}.{key}: expected a number >= 0, got {x}"));
+        }
+        FibreGroup::Stretch if !(x.is_finite() && x > 0.0) => {
+            return Err(format!("{p}.{key}: expected a positive number, got {x}"));
+        }
+        _ => {}
     }
     let shear = shear_flow(table, &format!("{p}.{key}"))?;
     Ok(group.stiffness(x, shear, f))
@@ -614,18 +622,20 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
             ))
         }
     };
-    let only_bead_spring = |key: &str, v: Option<f64>| -> Result<Option<f64>, String> {
+    let only_bead_spring = |key: &str, v: Option<f64>, zero: bool| -> Result<Option<f64>, String> {
         match v {
             None => Ok(None),
             Some(_) if model != ModelKind::BeadSpring => Err(format!(
                 "{p}.{key}: only the bead-spring model reads this key (model is {:?})",
                 model.name()
             )),
+            Some(x) if zero => non_negative(&format!("{p}.{key}"), x).map(Some),
             Some(x) => positive(&format!("{p}.{key}"), x).map(Some),
         }
     };
-    let stretch_stiffness = only_bead_spring("stretch_stiffness", raw.stretch_stiffness)?;
-    let bending_stiffness = only_bead_spring("bending_stiffness", raw.bending_stiffness)?;
+    let stretch_stiffness = only_bead_spring("stretch_stiffness", raw.stretch_stiffness, false)?;
+    // k_b = 0: a freely jointed chain (S2023's K -> 0).
+    let bending_stiffness = only_bead_spring("bending_stiffness", raw.bending_stiffness, true)?;
     let affinity = match raw.affinity {
         Some(a) => finite(&format!("{p}.affinity"), a)?,
         None => 0.0,
@@ -790,6 +800,23 @@ youngs_modulus = 1.0
         assert!((kb - 2.64).abs() < 1e-12, "{kb}");
     }
 
+    /// K = 0, S2023's freely jointed limit, gives k_b = 0, as `bending_stiffness = 0` does; a
+    /// bond still needs a stiffness.
+    #[test]
+    fn a_bending_number_of_zero_is_a_freely_jointed_chain() {
+        let s = parse_scene(&format!("{FPD_SHEAR}bending_number = 0\n")).unwrap();
+        assert_eq!(s.fibres[0].bending_stiffness, Some(0.0));
+        let s = parse_scene(&format!("{FPD_SHEAR}bending_stiffness = 0\n")).unwrap();
+        assert_eq!(s.fibres[0].bending_stiffness, Some(0.0));
+        for bad in [
+            "stretch_number = 0\n",
+            "stretch_stiffness = 0\n",
+            "bending_stiffness = -1\n",
+        ] {
+            assert!(parse_scene(&format!("{FPD_SHEAR}{bad}")).is_err(), "{bad}");
+        }
+    }
+
     /// Under SPM the gap is the rows between the wall slabs, ny - 2 T: a 200 x 168 grid with
     /// the default slabs of 4 has FPD's gap of 160, so the same K and K_s give the same k_b
     /// and k_s; thicker slabs, a narrower gap and a larger shear rate.
@@ -873,7 +900,7 @@ youngs_modulus = 1.0
             ),
             (
                 format!("{FPD_SHEAR}bending_number = -1.0\n"),
-                "expected a positive number",
+                "expected a number >= 0",
             ),
             (
                 FPD_SHEAR.replace("velocity = [-0.04, 0.04]", "velocity = [0.0, 0.0]")
