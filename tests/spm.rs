@@ -300,24 +300,26 @@ fn a_seeded_fibre_buckles_only_above_the_slender_body_threshold() {
 /// says (`stokes_chain_2d::chain_bending_moments` and `s_deflection_per_load`; measured 0.77
 /// of it, the fibre lagging the load), while the bead-spring chain of the same bending
 /// rigidity, whose beads turn freely with the fluid like rollers, bends a tenth as much
-/// (0.07). `check` notes the rollers. (docs/validation/fpd.md, "S2023's Fig. 7 scene with
-/// SPM".)
+/// (0.07). The same bead-spring chain with each bead turned with its bonds
+/// (`fibre.0.bead_spin = "chord"`, the fluid's torques passed to the chain as couples) bends
+/// as the beam does. `check` notes the rollers, and only them. (docs/validation/fpd.md,
+/// "S2023's Fig. 7 scene with SPM".)
 #[test]
 fn a_bead_spring_chain_under_spm_bends_like_rollers_and_a_cohesive_beam_as_stokes_says() {
     use coordinator::reference::stokes_chain_2d as bem;
     let (_, moments) = bem::chain_bending_moments(10, 1.0, 64, false);
     let per_load = bem::s_deflection_per_load(&moments);
-    let bend = |scene: &str, test: &str| {
-        let o: Vec<String> = [
-            "time.steps=1600",
-            "output.interval=1600",
-            "fibre.0.start=[125.5,58.5,0.0]",
-            "fibre.0.direction=[-1.0,1.0,0.0]",
-            "analysis.metrics=[]",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+    let bend = |scene: &str, test: &str, extra: &[String]| {
+        let o = overrides(
+            &[
+                "time.steps=1600",
+                "output.interval=1600",
+                "fibre.0.start=[125.5,58.5,0.0]",
+                "fibre.0.direction=[-1.0,1.0,0.0]",
+                "analysis.metrics=[]",
+            ],
+            extra,
+        );
         let s = run_in_process(&config(scene), &o, test);
         let states = read_topic(&run_dir(test).join("run.mcap"), "/fibre/bead_states").unwrap();
         let p: Vec<(f64, f64)> = states[1]["states"]
@@ -350,11 +352,25 @@ fn a_bead_spring_chain_under_spm_bends_like_rollers_and_a_cohesive_beam_as_stoke
         );
         sag / estimate
     };
-    let beam = bend("spm/s2023_fig7_twin_beam.toml", "spm-twin-beam-bend");
-    let rollers = bend("spm/s2023_fig7_twin.toml", "spm-twin-rollers-bend");
+    let beam = bend("spm/s2023_fig7_twin_beam.toml", "spm-twin-beam-bend", &[]);
+    let rollers = bend("spm/s2023_fig7_twin.toml", "spm-twin-rollers-bend", &[]);
+    // The same chain with each bead turned with its bonds (`bead_spin = "chord"`): the
+    // fluid's torques reach the chain as couples, as through a cohesive beam's joints.
+    let locked = bend(
+        "spm/s2023_fig7_twin.toml",
+        "spm-twin-locked-bend",
+        &[
+            "fibre.0.bead_spin=\"chord\"".into(),
+            "fibre.0.exchange=\"explicit\"".into(),
+        ],
+    );
     assert!(
         (0.6..1.2).contains(&beam),
         "cohesive beam: {beam} of the Stokes estimate"
+    );
+    assert!(
+        (0.6..1.2).contains(&locked),
+        "bead-spring chain turned with its chords: {locked} of the Stokes estimate"
     );
     assert!(
         rollers < 0.25,
@@ -366,6 +382,16 @@ fn a_bead_spring_chain_under_spm_bends_like_rollers_and_a_cohesive_beam_as_stoke
     };
     assert!(notes("spm/s2023_fig7_twin.toml").contains("train of rollers"));
     assert!(!notes("spm/s2023_fig7_twin_beam.toml").contains("rollers"));
+    let out = coordinator(&[
+        "check",
+        config("spm/s2023_fig7_twin.toml").to_str().unwrap(),
+        "--set",
+        "fibre.0.bead_spin=\"chord\"",
+        "--set",
+        "fibre.0.exchange=\"explicit\"",
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    assert!(!String::from_utf8(out.stdout).unwrap().contains("rollers"));
 }
 
 /// S2023's groups under SPM (coordinator/src/shear_groups.rs, cosim::scene_keys::wall_shear):

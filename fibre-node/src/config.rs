@@ -83,6 +83,10 @@ pub struct FibreConfig {
     /// velocity in the bead's profile, taken implicitly (see `crate::fibre`); `"explicit"`
     /// (default): the fluid's impulse is added as it comes (L2020 eqs. 35-36).
     pub implicit_exchange: bool,
+    /// Bead-spring under SPM, 2D: `bead_spin = "chord"` turns each bead with its chord (the
+    /// fluid's torque on a bead passed to its neighbours as a couple, `crate::fibre`), as in
+    /// a solid fibre; `"free"` (default): each bead spins freely with the fluid.
+    pub spin_with_chord: bool,
 }
 
 /// What the fibre node reads from a scene.
@@ -175,6 +179,7 @@ struct RawFibre {
     beam_forces: Option<String>,
     bead_inertia: Option<String>,
     exchange: Option<String>,
+    bead_spin: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -319,6 +324,15 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
             return Err(format!(
                 "fibre.{n}.exchange = \"implicit\": only the SPM fluid (fluid.method = \"spm\") \
                  exchanges momentum with the beads; remove the key"
+            ));
+        }
+        if f.spin_with_chord
+            && (coupling != Coupling::Spm || dimensions != 2 || f.implicit_exchange)
+        {
+            return Err(format!(
+                "fibre.{n}.bead_spin = \"chord\": read for a 2D scene with the SPM fluid \
+                 (fluid.method = \"spm\") and the explicit exchange, where a bead's spin is \
+                 otherwise its own; use \"free\" or remove the key"
             ));
         }
         if f.profile_inertia && coupling != Coupling::Spm {
@@ -670,7 +684,20 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         raw.exchange.as_deref().unwrap_or("explicit"),
         ["explicit", "implicit"],
     )?;
+    let spin_with_chord = switch(
+        p,
+        "bead_spin",
+        raw.bead_spin.as_deref().unwrap_or("free"),
+        ["free", "chord"],
+    )?;
+    if spin_with_chord && (model != ModelKind::BeadSpring || beads < 2) {
+        return Err(format!(
+            "{p}.bead_spin: only a bead-spring fibre of two or more beads reads this key \
+             (a cohesive beam's beads turn with the beam already)"
+        ));
+    }
     Ok(FibreConfig {
+        spin_with_chord,
         energy_consistent,
         profile_inertia,
         implicit_exchange,
@@ -798,6 +825,37 @@ youngs_modulus = 1.0
         assert_eq!(f.bending_number, Some(3.3));
         let kb = f.bending_stiffness.unwrap();
         assert!((kb - 2.64).abs() < 1e-12, "{kb}");
+    }
+
+    /// `bead_spin = "chord"` is read for a 2D bead-spring fibre under SPM with the explicit
+    /// exchange, and refused elsewhere with the reason.
+    #[test]
+    fn bead_spin_chord_is_read_where_a_beads_spin_is_its_own() {
+        let spm = FPD_SHEAR.replace("\"fpd-lbm\"", "\"spm\"");
+        let s = parse_scene(&format!("{spm}bead_spin = \"chord\"\n")).unwrap();
+        assert!(s.fibres[0].spin_with_chord);
+        assert!(!parse_scene(&spm).unwrap().fibres[0].spin_with_chord);
+        for (scene, why) in [
+            (format!("{FPD_SHEAR}bead_spin = \"chord\"\n"), "SPM fluid"),
+            (
+                format!("{spm}bead_spin = \"chord\"\nexchange = \"implicit\"\n"),
+                "explicit",
+            ),
+            (
+                spm.replace("dimensions = 2", "dimensions = 3")
+                    .replace("[200, 160]", "[200, 160, 16]")
+                    + "bead_spin = \"chord\"\n",
+                "2D",
+            ),
+            (
+                format!("{spm}bead_spin = \"rolling\"\n"),
+                "expected \"free\" or \"chord\"",
+            ),
+            (with("bead_spin = \"chord\""), "only a bead-spring fibre"),
+        ] {
+            let e = err(&scene);
+            assert!(e.contains(why), "{e}\n(expected `{why}`)");
+        }
     }
 
     /// K = 0, S2023's freely jointed limit, gives k_b = 0, as `bending_stiffness = 0` does; a

@@ -134,6 +134,13 @@ pub struct Fibre {
     pub held_displacement: Vec<Vec3>,
     /// Scratch for the internal damping (allocated only when it is on).
     probe: Option<Box<DampingProbe>>,
+    /// `fibre.N.bead_spin = "chord"` (bead-spring under SPM, 2D): each bead turns with its
+    /// chord instead of spinning freely, the angular impulses it takes passed to its
+    /// neighbours as couples ([`Fibre::pass_torques_to_neighbours`]).
+    pub spin_with_chord: bool,
+    /// Scratch: the linear impulses those couples give each bead (empty unless
+    /// `spin_with_chord`).
+    couple: Vec<Vec3>,
 }
 
 /// Scratch for the directional derivative of the internal forces along the velocities.
@@ -295,6 +302,12 @@ impl Fibre {
             implicit_exchange: None,
             hold_gains: [0.0; 2],
             held_displacement: vec![Vec3::zeros(); n],
+            spin_with_chord: cfg.spin_with_chord && with_fluid,
+            couple: if cfg.spin_with_chord && with_fluid {
+                vec![Vec3::zeros(); n]
+            } else {
+                Vec::new()
+            },
             probe: if cfg.internal_damping > 0.0 {
                 Some(Box::new(DampingProbe::new(n)))
             } else {
@@ -434,6 +447,9 @@ impl Fibre {
         let (inv_m, inv_i, c) = (1.0 / self.mass, 1.0 / self.inertia, self.damping);
         let torques = self.elastic_torques || !self.loads.is_empty();
         let n = self.substeps as f64;
+        if self.spin_with_chord {
+            self.pass_torques_to_neighbours(h, &hydro, torques);
+        }
         for k in 0..self.pos.len() {
             if self.clamped[k] {
                 continue;
@@ -479,9 +495,12 @@ impl Fibre {
             };
             if let Some((j, l)) = share {
                 nv += j * inv_m;
-                if self.rotates {
+                if self.rotates && !self.spin_with_chord {
                     nw += l * inv_i;
                 }
+            }
+            if self.spin_with_chord {
+                nv += self.couple[k] * inv_m;
             }
             if self.planar {
                 nv.z = 0.0;
@@ -490,6 +509,65 @@ impl Fibre {
             }
             self.vel[k] = nv;
             self.omega[k] = nw;
+        }
+        if self.spin_with_chord {
+            self.turn_beads_with_chords();
+        }
+    }
+
+    /// `bead_spin = "chord"`: the angular impulse bead i takes in this kick (the fluid's share
+    /// and `h` times its load torques), `L_i`, passed to the chain as couples. Each bond
+    /// (i, j), `d = X_j - X_i`, carries `w L_i` (w = 1/2 for an interior bead, 1 at an end)
+    /// as the impulse `P = w L_i x d / |d|^2` on bead j and `-P` on bead i: no net impulse,
+    /// and the angular impulse `d x P = w L_i` (2D: L is normal to d). So the chain takes the
+    /// fluid's angular momentum into its motion instead of the beads' spin. Into `couple`.
+    fn pass_torques_to_neighbours(&mut self, h: f64, hydro: &HydroKick, torques: bool) {
+        let n = self.pos.len();
+        let substeps = self.substeps as f64;
+        for c in self.couple.iter_mut() {
+            *c = Vec3::zeros();
+        }
+        for i in 0..n {
+            let mut l = match hydro {
+                HydroKick::None => Vec3::zeros(),
+                HydroKick::Predicted => self.predicted_angular_impulse[i] / substeps,
+                HydroKick::Share(imp, share) => Vec3::from(imp[i].angular_impulse) * *share,
+            };
+            if torques {
+                l += h * self.torque[i];
+            }
+            let bonds = [(i > 0).then(|| i - 1), (i + 1 < n).then_some(i + 1)];
+            let w = if bonds.iter().all(Option::is_some) {
+                0.5
+            } else {
+                1.0
+            };
+            for j in bonds.into_iter().flatten() {
+                let d = self.pos[j] - self.pos[i];
+                let p = (w * l).cross(&d) / d.norm_squared();
+                self.couple[j] += p;
+                self.couple[i] -= p;
+            }
+        }
+    }
+
+    /// `bead_spin = "chord"`: each bead's angular velocity the mean rate at which its bonds
+    /// turn, `d x (V_j - V_i) / |d|^2` (the one bond at an end).
+    fn turn_beads_with_chords(&mut self) {
+        let n = self.pos.len();
+        for i in 0..n {
+            if self.clamped[i] {
+                continue;
+            }
+            let bonds = [(i > 0).then(|| i - 1), (i + 1 < n).then_some(i + 1)];
+            let mut w = Vec3::zeros();
+            let mut count = 0.0;
+            for j in bonds.into_iter().flatten() {
+                let d = self.pos[j] - self.pos[i];
+                w += d.cross(&(self.vel[j] - self.vel[i])) / d.norm_squared();
+                count += 1.0;
+            }
+            self.omega[i] = w / count;
         }
     }
 
@@ -703,6 +781,61 @@ mod tests {
             let held = f.force[0] + f.force[1];
             assert!((held - want).norm() < 1e-12, "{held} vs {want}");
         }
+    }
+
+    /// `bead_spin = "chord"`: angular impulses on the beads of a bent chain at rest become the
+    /// chain's own motion. No net impulse (to round-off), the orbital angular momentum
+    /// `sum X x m V` gains exactly the angular impulse given, and every bead turns at the rate
+    /// of its bonds; with free spin the same impulse only spins the beads.
+    #[test]
+    fn a_chord_locked_chain_takes_the_fluids_torque_into_its_motion() {
+        let scene = |spin: &str| {
+            format!(
+                "dimensions = 2\n[time]\ndt = 1\n[fluid]\nmethod = \"spm\"\n[[fibre]]\n\
+                 model = \"bead-spring\"\nbeads = 4\nbead_radius = 1\nyoungs_modulus = 1\n\
+                 initial_bend = 0.3\nbead_spin = \"{spin}\"\n"
+            )
+        };
+        let torques = [0.2, -0.05, 0.7, 0.1];
+        let imps: Vec<BeadImpulse> = torques
+            .iter()
+            .map(|&t| BeadImpulse {
+                impulse: [0.0; 3],
+                angular_impulse: [0.0, 0.0, t],
+            })
+            .collect();
+        let given: f64 = torques.iter().sum();
+        let orbital = |f: &Fibre| -> f64 {
+            (0..f.len())
+                .map(|k| f.pos[k].cross(&(f.mass * f.vel[k])).z)
+                .sum()
+        };
+        let mut f = fibre(&scene("chord"));
+        assert!(f.spin_with_chord);
+        let (l0, p0) = (orbital(&f), f.momentum());
+        f.advance_velocities(1.0, Some(&imps), false);
+        assert!((f.momentum() - p0).norm() < 1e-15, "{}", f.momentum());
+        let gained = orbital(&f) - l0;
+        assert!(
+            (gained - given).abs() < 1e-12 * given,
+            "{gained} vs {given}"
+        );
+        for i in 0..f.len() {
+            let mut rate = 0.0;
+            let mut bonds = 0.0;
+            for j in [i.wrapping_sub(1), i + 1] {
+                if j < f.len() {
+                    let d = f.pos[j] - f.pos[i];
+                    rate += d.cross(&(f.vel[j] - f.vel[i])).z / d.norm_squared();
+                    bonds += 1.0;
+                }
+            }
+            assert!((f.omega[i].z - rate / bonds).abs() < 1e-15, "bead {i}");
+        }
+        let mut free = fibre(&scene("free"));
+        free.advance_velocities(1.0, Some(&imps), false);
+        assert!(orbital(&free).abs() < 1e-15);
+        assert!((free.omega[2].z - 0.7 / free.inertia).abs() < 1e-15);
     }
 
     #[test]
