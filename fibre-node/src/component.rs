@@ -1230,6 +1230,36 @@ mod tests {
         assert_eq!(out[3].orientation, [1.0, 0.0, 0.0, 0.0]);
     }
 
+    /// S2023's K = 2 k_b / (eta gamma l_c^2) is reported for both models in a wall shear,
+    /// with k_b = E I / l0 for the cohesive beam: a beam and a bead-spring chain of the same
+    /// modulus report one K; walls at -+0.05 across a gap of 160 between SPM slabs of 4
+    /// (gamma = 6.25e-4), eta = 2/3, l_c = 80.
+    #[test]
+    fn both_models_report_one_bending_number_for_one_rigidity() {
+        let scene = |model: &str| {
+            format!(
+                "dimensions = 2\n[time]\ndt = 1e-3\n[fluid]\nmethod = \"spm\"\ngrid = [200, 168]\n\
+                 viscosity = 0.6666666666666666\nxi = 0.1\n[walls]\nvelocity = [-0.05, 0.05]\n\
+                 [[fibre]]\nmodel = \"{model}\"\nbeads = 10\nbead_radius = 4\n\
+                 youngs_modulus = 0.17507\n"
+            )
+        };
+        let k = |model: &str| {
+            let (_, _, cfg) = configure(&scene(model));
+            cfg.derived
+                .iter()
+                .find(|(n, _)| n == "fibre.0.bending_number")
+                .unwrap_or_else(|| panic!("{model}: no bending number"))
+                .1
+        };
+        let (beam, chain) = (k("cohesive-beam"), k("bead-spring"));
+        // E I = E pi r^4 / 4 = 35.2, k_b = E I / 8 = 4.4: K = 4.4 / (0.5 x 2/3 x 6.25e-4 x 6400).
+        let want =
+            0.17507 * std::f64::consts::PI * 256.0 / 4.0 / 8.0 / (2.0 / 3.0 * 6.25e-4 * 3200.0);
+        assert!((beam - want).abs() < 1e-12 * want, "{beam} vs {want}");
+        assert!((chain - beam).abs() < 1e-12 * want, "{chain} vs {beam}");
+    }
+
     #[test]
     fn phases_reports_and_impulses() {
         let scene = "dimensions = 2\n[time]\ndt = 1e-3\n[fluid]\nmethod = \"spm\"\nxi = 0.1\n[[fibre]]\nmodel = \"cohesive-beam\"\nbeads = 3\nbead_radius = 1\nyoungs_modulus = 1\n[[fibre]]\nmodel = \"bead-spring\"\nbeads = 2\nbead_radius = 1\nyoungs_modulus = 1\n";
