@@ -765,8 +765,6 @@ mod tests {
         }
     }
 
-    /// A `[curve]` adds its abscissa as a column of the table and as the CSV's last column;
-    /// without one both keep their usual columns.
     #[test]
     fn a_variant_is_labelled_by_the_keys_that_tell_its_rows_apart() {
         let vary = |text: &str| -> Vary { toml::from_str(text).unwrap() };
@@ -788,6 +786,8 @@ mod tests {
         assert_eq!(v.label_keys(0).unwrap(), ["fibre.0.bending_number"]);
     }
 
+    /// A `[curve]` adds its abscissa as a column of the table and as the CSV's last column;
+    /// without one both keep their usual columns.
     #[test]
     fn a_curve_adds_its_abscissa_to_the_table_and_the_csv() {
         let mut r = row(8.0, 0.25);

@@ -145,7 +145,7 @@ pub fn wall_margin(table: &toml::Table) -> f64 {
 }
 
 /// A TOML number, integer or float.
-fn number(v: &toml::Value) -> Option<f64> {
+pub fn number(v: &toml::Value) -> Option<f64> {
     v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
 }
 

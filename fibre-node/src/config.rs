@@ -7,7 +7,8 @@
 use crate::spm_exchange::SmoothedProfile;
 use cosim::profile::{DEFAULT_CUTOFF_OVER_XI, DEFAULT_FPD_INTERFACE_RATIO, DEFAULT_XI};
 use cosim::scene_keys::{
-    self, describe_value as describe_toml, deserialize_at as deserialize, positive,
+    self, describe_value as describe_toml, deserialize_at as deserialize, number as toml_number,
+    positive,
 };
 use serde::Deserialize;
 
@@ -368,11 +369,6 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
             .flatten(),
         fibres,
     })
-}
-
-/// A TOML number, integer or float.
-fn toml_number(v: &toml::Value) -> Option<f64> {
-    v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
 }
 
 /// The sheared fluid S2023's fibre groups are defined on: `eta_f = fluid.viscosity` and the

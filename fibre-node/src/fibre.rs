@@ -274,6 +274,7 @@ impl Fibre {
                 torque: Vec3::from(l.torque),
             })
             .collect();
+        let spin_with_chord = cfg.spin_with_chord && with_fluid;
         let mut f = Self {
             model,
             planar,
@@ -302,8 +303,8 @@ impl Fibre {
             implicit_exchange: None,
             hold_gains: [0.0; 2],
             held_displacement: vec![Vec3::zeros(); n],
-            spin_with_chord: cfg.spin_with_chord && with_fluid,
-            couple: if cfg.spin_with_chord && with_fluid {
+            spin_with_chord,
+            couple: if spin_with_chord {
                 vec![Vec3::zeros(); n]
             } else {
                 Vec::new()
