@@ -149,11 +149,6 @@ pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
     let margin = cosim::scene_keys::wall_margin(scene);
     // `dimensions` is checked by every node; here only a clear 3D is told apart.
     let two_d = cosim::scene_keys::dimensions(scene).ok().map(|d| d == 2);
-    let walls: Option<Vec<f64>> = scene
-        .get("walls")
-        .and_then(|w| w.get("velocity"))
-        .and_then(|v| v.as_array())
-        .map(|v| v.iter().filter_map(|x| number(Some(x))).collect());
     let fluid = scene
         .get_mut("fluid")
         .and_then(|f| f.as_table_mut())
@@ -162,7 +157,8 @@ pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
         Some(toml::Value::Array(g)) => g.clone(),
         _ => Vec::new(),
     };
-    let ny = if let Some(c) = c {
+    // The gap is checked here, with messages about the groups; `wall_shear` reads it below.
+    let _gap = if let Some(c) = c {
         if two_d == Some(false) {
             return Err(
                 "fluid.confinement sets the gap of a 2D scene (S2023 are 2D): a 3D scene gives \
@@ -236,23 +232,20 @@ pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
                     .into(),
             );
         }
-        let gamma = match walls.as_deref() {
-            Some([b, t]) if t != b => (t - b).abs() / ny,
-            _ => {
-                return Err(
-                    "fluid.particle_shear_reynolds needs a shear: walls.velocity = \
-                            [bottom, top] with different speeds"
-                        .into(),
-                )
-            }
-        };
         let rho = match fluid.get("density") {
             None => DEFAULT_DENSITY,
             v => number(v)
                 .filter(|r| r.is_finite() && *r > 0.0)
                 .ok_or("fluid.density: expected a positive number")?,
         };
+        // gamma on the gap just set (or given), read as the fibre node reads it for K and K_s.
+        let gamma =
+            cosim::scene_keys::wall_shear(scene, "fluid.particle_shear_reynolds")?.shear_rate;
         let eta = rho * gamma * lc * lc / (4.0 * re);
+        let fluid = scene
+            .get_mut("fluid")
+            .and_then(|f| f.as_table_mut())
+            .expect("checked above");
         fluid.insert("viscosity".into(), toml::Value::Float(eta));
         fluid.remove(RE);
         out.lines.push(format!(
