@@ -327,13 +327,11 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
                  exchanges momentum with the beads; remove the key"
             ));
         }
-        if f.spin_with_chord
-            && (coupling != Coupling::Spm || dimensions != 2 || f.implicit_exchange)
-        {
+        if f.spin_with_chord && (coupling != Coupling::Spm || dimensions != 2) {
             return Err(format!(
                 "fibre.{n}.bead_spin = \"chord\": read for a 2D scene with the SPM fluid \
-                 (fluid.method = \"spm\") and the explicit exchange, where a bead's spin is \
-                 otherwise its own; use \"free\" or remove the key"
+                 (fluid.method = \"spm\"), where a bead's spin is otherwise its own; use \
+                 \"free\" or remove the key"
             ));
         }
         if f.profile_inertia && coupling != Coupling::Spm {
@@ -823,7 +821,7 @@ youngs_modulus = 1.0
         assert!((kb - 2.64).abs() < 1e-12, "{kb}");
     }
 
-    /// `bead_spin = "chord"` is read for a 2D bead-spring fibre under SPM with the explicit
+    /// `bead_spin = "chord"` is read for a 2D bead-spring fibre under SPM, with either
     /// exchange, and refused elsewhere with the reason.
     #[test]
     fn bead_spin_chord_is_read_where_a_beads_spin_is_its_own() {
@@ -831,12 +829,13 @@ youngs_modulus = 1.0
         let s = parse_scene(&format!("{spm}bead_spin = \"chord\"\n")).unwrap();
         assert!(s.fibres[0].spin_with_chord);
         assert!(!parse_scene(&spm).unwrap().fibres[0].spin_with_chord);
+        let implicit = parse_scene(&format!(
+            "{spm}bead_spin = \"chord\"\nexchange = \"implicit\"\n"
+        ))
+        .unwrap();
+        assert!(implicit.fibres[0].spin_with_chord && implicit.fibres[0].implicit_exchange);
         for (scene, why) in [
             (format!("{FPD_SHEAR}bead_spin = \"chord\"\n"), "SPM fluid"),
-            (
-                format!("{spm}bead_spin = \"chord\"\nexchange = \"implicit\"\n"),
-                "explicit",
-            ),
             (
                 spm.replace("dimensions = 2", "dimensions = 3")
                     .replace("[200, 160]", "[200, 160, 16]")
