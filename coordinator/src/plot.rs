@@ -234,6 +234,49 @@ fn axis_range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     }
 }
 
+/// Where a regime map's legend covers the fewest points: the points' places as fractions
+/// of the axes (0 to 1, log where the axis is), against the box a legend of `rows` classes
+/// takes at each candidate position, and how many it covers there. MiddleRight first, so
+/// that a map with room there keeps it.
+fn legend_place(places: &[(f64, f64)], rows: usize) -> (SeriesLabelPosition, usize) {
+    use SeriesLabelPosition::*;
+    // The legend's box as fractions of the plotting area (about 130 x (25 rows + 20) px of
+    // ~780 x 470), and a point's radius.
+    let (w, h, r) = (0.17, legend_height(rows) - 0.04, 0.02);
+    let span = |lo: f64, len: f64| (lo - r, lo + len + r);
+    let (left, right) = (span(0.0, w), span(1.0 - w, w));
+    let (lower, upper, middle) = (span(0.0, h), span(1.0 - h, h), span(0.5 - h / 2.0, h));
+    let centre = span(0.5 - w / 2.0, w);
+    let candidates = [
+        (MiddleRight, right, middle),
+        (UpperRight, right, upper),
+        (LowerRight, right, lower),
+        (UpperLeft, left, upper),
+        (LowerLeft, left, lower),
+        (MiddleLeft, left, middle),
+        (UpperMiddle, centre, upper),
+        (LowerMiddle, centre, lower),
+    ];
+    let inside = |(a, b): (f64, f64), v: f64| a <= v && v <= b;
+    let mut best = (usize::MAX, MiddleRight);
+    for (place, xs, ys) in candidates {
+        let covered = places
+            .iter()
+            .filter(|&&(x, y)| inside(xs, x) && inside(ys, y))
+            .count();
+        if covered < best.0 {
+            best = (covered, place);
+        }
+    }
+    (best.1, best.0)
+}
+
+/// The legend's height as a fraction of the plotting area, with a point's radius above and
+/// below: what [`legend_place`] takes for its box.
+fn legend_height(rows: usize) -> f64 {
+    (25.0 * rows as f64 + 20.0) / 470.0 + 0.04
+}
+
 /// A regime map: every point coloured by its class, with a legend (S2023 Fig. 10a style).
 /// `x` and `y` are (axis name, logarithmic).
 pub fn regime_map(
@@ -254,18 +297,43 @@ pub fn regime_map(
     }
     // Axis ranges with a margin: a factor on a log axis, a fraction of the span otherwise.
     let (x0, x1) = axis_range(pts.iter().map(|p| p.x), x.1);
-    let (y0, y1) = axis_range(pts.iter().map(|p| p.y), y.1);
-    let e = |e: DrawingAreaErrorKind<_>| format!("plotting {}: {e:?}", path.display());
-    let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
-    root.fill(&WHITE).map_err(e)?;
-    let mut others = Vec::new();
+    let (y0, mut y1) = axis_range(pts.iter().map(|p| p.y), y.1);
+    let fraction = |v: f64, (lo, hi): (f64, f64), log: bool| {
+        if log {
+            (v / lo).ln() / (hi / lo).ln()
+        } else {
+            (v - lo) / (hi - lo)
+        }
+    };
+    let places: Vec<(f64, f64)> = pts
+        .iter()
+        .map(|p| (fraction(p.x, (x0, x1), x.1), fraction(p.y, (y0, y1), y.1)))
+        .collect();
     let mut classes: Vec<(String, RGBColor)> = Vec::new();
+    let mut others = Vec::new();
     for p in &pts {
         if !classes.iter().any(|(c, _)| *c == p.class) {
             let colour = class_colour(&p.class, &mut others);
             classes.push((p.class.clone(), colour));
         }
     }
+    // No free place for the legend: raise the top of the y axis so that the points leave
+    // the upper right to it.
+    let legend_at = match legend_place(&places, classes.len()) {
+        (place, 0) => place,
+        _ => {
+            let keep = 1.0 - legend_height(classes.len());
+            y1 = if y.1 {
+                y0 * (y1 / y0).powf(1.0 / keep)
+            } else {
+                y0 + (y1 - y0) / keep
+            };
+            SeriesLabelPosition::UpperRight
+        }
+    };
+    let e = |e: DrawingAreaErrorKind<_>| format!("plotting {}: {e:?}", path.display());
+    let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(e)?;
     let mut builder = titled_chart(&root, title);
     on_axes!(builder, e, (x0, x1, x.1), (y0, y1, y.1), |chart| {
         chart
@@ -289,7 +357,7 @@ pub fn regime_map(
                 .label(class.clone())
                 .legend(move |(px, py)| Circle::new((px, py), 6, c.filled()));
         }
-        legend!(chart, e, SeriesLabelPosition::MiddleRight);
+        legend!(chart, e, legend_at);
     });
     root.present().map_err(e)?;
     Ok(())
@@ -595,6 +663,24 @@ pub fn metric_against(
 #[cfg(test)]
 mod tests {
     use super::with_a_decade;
+
+    /// The legend goes where it covers no point: MiddleRight when that is free, elsewhere
+    /// when a point sits there.
+    #[test]
+    fn a_regime_maps_legend_avoids_the_points() {
+        use super::legend_place;
+        use plotters::prelude::SeriesLabelPosition::*;
+        let spread = [(0.1, 0.1), (0.1, 0.9), (0.5, 0.1), (0.5, 0.9)];
+        assert!(matches!(legend_place(&spread, 4), (MiddleRight, 0)));
+        let right_edge: Vec<_> = spread.iter().copied().chain([(0.95, 0.5)]).collect();
+        let place = legend_place(&right_edge, 4);
+        assert!(matches!(place, (UpperRight | LowerRight, 0)), "{place:?}");
+        // Points everywhere: every place covers one.
+        let grid: Vec<_> = (0..=10)
+            .flat_map(|i| (0..=10).map(move |j| (0.1 * i as f64, 0.1 * j as f64)))
+            .collect();
+        assert!(legend_place(&grid, 4).1 > 0);
+    }
 
     fn close(a: (f64, f64), b: (f64, f64)) -> bool {
         (a.0 / b.0 - 1.0).abs() < 1e-12 && (a.1 / b.1 - 1.0).abs() < 1e-12
