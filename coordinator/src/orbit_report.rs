@@ -16,7 +16,7 @@ use crate::orbit::{angular_velocity, direction_deg, OrientationSeries};
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// The files [`write`] writes.
+/// The files [`write()`] writes.
 pub const FILES: [&str; 2] = ["orbit.csv", "orbit.png"];
 
 /// Remove orbit files an earlier run left in `dir`, so that a run that writes none does not

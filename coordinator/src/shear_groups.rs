@@ -74,7 +74,7 @@ const PAIRS: [(&str, &str); 5] = [
     ("centred", "start"),
 ];
 
-/// After the override of `path`: drop the key of its pair ([`PAIRS`]) from the scene, and say
+/// After the override of `path`: drop the key of its pair (`PAIRS`) from the scene, and say
 /// so. `fluid.confinement` keeps the grid's length (`[nx, ny]` becomes `[nx]`); a grid of
 /// one size, `[nx]`, keeps the confinement; `centred = false` keeps `start`.
 pub fn supersede(scene: &mut toml::Table, path: &str) -> Option<String> {

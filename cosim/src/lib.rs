@@ -6,12 +6,12 @@
 //! - [`description`]: the FMU-style model description a node answers to `describe`;
 //! - [`phase`]: the phases of the fractional step and the schedules built from them;
 //! - [`protocol`]: control commands from the coordinator and the replies of a node;
-//! - [`component`]: the [`Component`](component::Component) trait every node implements and
+//! - [`component`]: the [`Component`] trait every node implements and
 //!   the one dispatch function both transports share;
 //! - [`profile`]: the smoothed profile of one bead (L2020 eq. 25) and its integrals, the one
 //!   definition both nodes use;
 //! - [`scene_keys`]: reading a node's scene tables with errors naming the dotted key;
-//! - [`exchange`]: the bulk-data [`Exchange`](exchange::Exchange) trait and its in-process
+//! - [`exchange`]: the bulk-data [`Exchange`] trait and its in-process
 //!   implementation; [`ipc`]: the iceoryx2 implementation of control and bulk data;
 //! - [`vtk`]: VTK XML files (fields, beads, time collections) for ParaView.
 pub mod component;

@@ -51,7 +51,7 @@ pub struct FibreConfig {
     pub density: f64,
     pub start: [f64; 3],
     /// `centred = true`: `start` is set so that the fibre's midpoint lies at the centre of the
-    /// gap between the walls ([`centre_in_gap`]).
+    /// gap between the walls (`centre_in_gap`).
     pub centred: bool,
     /// Unit vector.
     pub direction: [f64; 3],
@@ -456,7 +456,7 @@ impl FibreGroup {
         }
     }
 
-    /// The group a stiffness gives (the inverse of [`Self::stiffness`]).
+    /// The group a stiffness gives (the inverse of `Self::stiffness`).
     pub fn of(self, stiffness: f64, shear: ShearFlow, f: &FibreConfig) -> f64 {
         stiffness / self.stiffness(1.0, shear, f)
     }

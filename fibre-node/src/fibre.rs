@@ -136,7 +136,7 @@ pub struct Fibre {
     probe: Option<Box<DampingProbe>>,
     /// `fibre.N.bead_spin = "chord"` (bead-spring under SPM, 2D): each bead turns with its
     /// chord instead of spinning freely, the angular impulses it takes passed to its
-    /// neighbours as couples ([`Fibre::pass_torques_to_neighbours`]).
+    /// neighbours as couples (`Fibre::pass_torques_to_neighbours`).
     pub spin_with_chord: bool,
     /// Scratch: the linear impulses those couples give each bead (empty unless
     /// `spin_with_chord`).

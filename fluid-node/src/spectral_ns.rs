@@ -477,7 +477,7 @@ impl SpectralNs {
     }
 
     /// [`SpectralNs::kinetic_energy`] and [`SpectralNs::max_speed`] in one pass over the
-    /// field, rows in parallel, each summed in interleaved lanes ([`row_energy_and_max`]):
+    /// field, rows in parallel, each summed in interleaved lanes (`row_energy_and_max`):
     /// a fixed order whatever the threads. One running sum would wait on each addition in
     /// turn (latency-bound: 3x slower at 256 x 200). NaN anywhere makes both NaN, so that a
     /// broken field is seen.

@@ -215,7 +215,7 @@ fn chain(beads: usize, radius: f64, m: usize) -> Boundary {
 /// S. Used to ask how that moment grows with the chain's thickness at a fixed length.
 ///
 /// With `spinning` the discs turn freely about their centres (a chain of rollers, see
-/// [`solve`]), so no disc carries a torque and the joints carry only the moments of the
+/// `solve`), so no disc carries a torque and the joints carry only the moments of the
 /// discs' forces.
 pub fn chain_bending_moments(
     beads: usize,

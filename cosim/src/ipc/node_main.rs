@@ -5,7 +5,7 @@ use crate::Component;
 use std::io::Write;
 use std::process::ExitCode;
 
-/// Run a node executable named `program` from its command-line `args` (without argv[0]).
+/// Run a node executable named `program` from its command-line `args` (without `argv[0]`).
 /// `component` is built only when needed.
 pub fn node_main<C: Component>(
     program: &str,
