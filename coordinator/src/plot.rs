@@ -240,9 +240,7 @@ fn axis_range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
 /// that a map with room there keeps it.
 fn legend_place(places: &[(f64, f64)], rows: usize) -> (SeriesLabelPosition, usize) {
     use SeriesLabelPosition::*;
-    // The legend's box as fractions of the plotting area (about 130 x (25 rows + 20) px of
-    // ~780 x 470), and a point's radius.
-    let (w, h, r) = (0.17, legend_height(rows) - 0.04, 0.02);
+    let (w, h, r) = (0.17, legend_height(rows), POINT_RADIUS);
     let span = |lo: f64, len: f64| (lo - r, lo + len + r);
     let (left, right) = (span(0.0, w), span(1.0 - w, w));
     let (lower, upper, middle) = (span(0.0, h), span(1.0 - h, h), span(0.5 - h / 2.0, h));
@@ -271,11 +269,14 @@ fn legend_place(places: &[(f64, f64)], rows: usize) -> (SeriesLabelPosition, usi
     (best.1, best.0)
 }
 
-/// The legend's height as a fraction of the plotting area, with a point's radius above and
-/// below: what [`legend_place`] takes for its box.
+/// A regime map's legend of `rows` classes, its height as a fraction of the plotting area
+/// (about 25 px a row and 20 px of margin, of ~470 px; its width is about 0.17 of ~780 px).
 fn legend_height(rows: usize) -> f64 {
-    (25.0 * rows as f64 + 20.0) / 470.0 + 0.04
+    (25.0 * rows as f64 + 20.0) / 470.0
 }
+
+/// A regime map point's radius as a fraction of the plotting area.
+const POINT_RADIUS: f64 = 0.02;
 
 /// A regime map: every point coloured by its class, with a legend (S2023 Fig. 10a style).
 /// `x` and `y` are (axis name, logarithmic).
@@ -322,7 +323,7 @@ pub fn regime_map(
     let legend_at = match legend_place(&places, classes.len()) {
         (place, 0) => place,
         _ => {
-            let keep = 1.0 - legend_height(classes.len());
+            let keep = 1.0 - legend_height(classes.len()) - 2.0 * POINT_RADIUS;
             y1 = if y.1 {
                 y0 * (y1 / y0).powf(1.0 / keep)
             } else {
