@@ -305,6 +305,14 @@ impl Fibre {
             })
             .collect();
         let spin_with_chord = cfg.spin_with_chord && with_fluid;
+        // The chord-locked spins' scratch, one vector a bead, held only by chains that use it.
+        let chord_scratch = || {
+            if spin_with_chord {
+                vec![Vec3::zeros(); n]
+            } else {
+                Vec::new()
+            }
+        };
         let mut f = Self {
             model,
             planar,
@@ -334,21 +342,9 @@ impl Fibre {
             hold_gains: [0.0; 2],
             held_displacement: vec![Vec3::zeros(); n],
             spin_with_chord,
-            couple: if spin_with_chord {
-                vec![Vec3::zeros(); n]
-            } else {
-                Vec::new()
-            },
-            chord_base: if spin_with_chord {
-                vec![Vec3::zeros(); n]
-            } else {
-                Vec::new()
-            },
-            chord_spin: if spin_with_chord {
-                vec![Vec3::zeros(); n]
-            } else {
-                Vec::new()
-            },
+            couple: chord_scratch(),
+            chord_base: chord_scratch(),
+            chord_spin: chord_scratch(),
             probe: if cfg.internal_damping > 0.0 {
                 Some(Box::new(DampingProbe::new(n)))
             } else {
@@ -496,10 +492,7 @@ impl Fibre {
         if implicit_chord {
             if let (HydroKick::Share(imp, _), Some([_, i_phi])) = (hydro, self.implicit_exchange) {
                 for k in 0..self.pos.len() {
-                    let w0 = match self.start.get(k) {
-                        Some(b) if self.start.len() == self.pos.len() => b.omega,
-                        _ => self.omega[k],
-                    };
+                    let (_, w0) = self.start_rates(k);
                     self.chord_spin[k] = w0 + Vec3::from(imp[k].angular_impulse) / i_phi;
                 }
             }
@@ -530,10 +523,7 @@ impl Fibre {
                     // The fluid's impulse is m_phi (u_phi - U^n): the drag towards u_phi,
                     // with this kick's share of m_phi, taken at the new velocity.
                     Some([m_phi, i_phi]) => {
-                        let (u0, w0) = match self.start.get(k) {
-                            Some(b) if self.start.len() == self.pos.len() => (b.vel, b.omega),
-                            _ => (v, w),
-                        };
+                        let (u0, w0) = self.start_rates(k);
                         let target = u0 + Vec3::from(imp[k].impulse) / m_phi;
                         let (a, b) = (share * m_phi, share * i_phi);
                         nv = (self.mass * nv + a * target) / (self.mass + a);
@@ -573,6 +563,16 @@ impl Fibre {
         }
         if self.spin_with_chord {
             self.turn_beads_with_chords();
+        }
+    }
+
+    /// Bead `k`'s velocity and spin at the start of the step, which the implicit exchange's
+    /// drag is measured from: the saved start state when there is one for every bead, else
+    /// the current (V, Omega), which are the start's until this step's first kick.
+    fn start_rates(&self, k: usize) -> (Vec3, Vec3) {
+        match self.start.get(k) {
+            Some(b) if self.start.len() == self.pos.len() => (b.vel, b.omega),
+            _ => (self.vel[k], self.omega[k]),
         }
     }
 
