@@ -158,72 +158,10 @@ pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
         _ => Vec::new(),
     };
     // The gap is checked here, with messages about the groups; `wall_shear` reads it below.
-    let _gap = if let Some(c) = c {
-        if two_d == Some(false) {
-            return Err(
-                "fluid.confinement sets the gap of a 2D scene (S2023 are 2D): a 3D scene gives \
-                 fluid.grid = [nx, ny, nz]"
-                    .into(),
-            );
-        }
-        let nx = match grid.as_slice() {
-            [nx] if nx.is_integer() => nx.clone(),
-            _ => {
-                return Err(format!(
-                    "fluid.confinement sets the gap H = l_c / C (S2023 eq. 18), so fluid.grid \
-                     takes the length alone: grid = [nx] (got {})",
-                    fluid
-                        .get("grid")
-                        .map_or("no fluid.grid".to_string(), |g| g.to_string())
-                ))
-            }
-        };
-        let exact = lc / c;
-        let ny = (exact + margin).round();
-        let h = ny - margin;
-        if h < 1.0 {
-            return Err(format!(
-                "fluid.confinement = {c}: the gap l_c / C = {exact} is below one lattice node"
-            ));
-        }
-        fluid.insert(
-            "grid".into(),
-            toml::Value::Array(vec![nx.clone(), toml::Value::Integer(ny as i64)]),
-        );
-        fluid.remove(C);
-        let gap = if margin > 0.0 {
-            format!("H = ny - 2 T = {h} = l_c / C")
-        } else {
-            "H = ny = l_c / C".to_string()
-        };
-        out.lines.push(format!(
-            "fluid.confinement = {c} -> fluid.grid = [{nx}, {ny}] ({gap}, l_c = {lc})"
-        ));
-        if (h - exact).abs() > 1e-9 * exact {
-            out.notes.push(format!(
-                "fluid.confinement = {c}: the gap l_c / C = {exact:.4} is rounded to {h} lattice \
-                 nodes, so the scene runs at C = {:.6} (the summary's fluid.confinement)",
-                lc / h
-            ));
-        }
-        h
-    } else {
-        match grid.as_slice() {
-            [_, ny, ..] => number(Some(ny))
-                .map(|ny| ny - margin)
-                .filter(|h| *h > 0.0)
-                .ok_or(
-                    "fluid.grid: expected [nx, ny] with positive sizes and a gap between the walls",
-                )?,
-            _ => {
-                return Err(
-                    "fluid.particle_shear_reynolds needs the gap: fluid.grid = [nx, ny], or \
-                         fluid.grid = [nx] with fluid.confinement"
-                        .into(),
-                )
-            }
-        }
-    };
+    match c {
+        Some(c) => set_gap(fluid, c, lc, margin, two_d, &grid, &mut out)?,
+        None => check_gap(&grid, margin)?,
+    }
     if let Some(re) = re {
         if fluid.contains_key("viscosity") {
             return Err(
@@ -254,6 +192,86 @@ pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
         ));
     }
     Ok(out)
+}
+
+/// `fluid.confinement = C`: set the gap H = l_c / C (S2023 eq. 18) as fluid.grid's second
+/// size, on top of the walls' `margin` rows, and say so in `out`.
+fn set_gap(
+    fluid: &mut toml::Table,
+    c: f64,
+    lc: f64,
+    margin: f64,
+    two_d: Option<bool>,
+    grid: &[toml::Value],
+    out: &mut Resolved,
+) -> Result<(), String> {
+    const C: &str = "confinement";
+    if two_d == Some(false) {
+        return Err(
+            "fluid.confinement sets the gap of a 2D scene (S2023 are 2D): a 3D scene gives \
+             fluid.grid = [nx, ny, nz]"
+                .into(),
+        );
+    }
+    let nx = match grid {
+        [nx] if nx.is_integer() => nx.clone(),
+        _ => {
+            return Err(format!(
+                "fluid.confinement sets the gap H = l_c / C (S2023 eq. 18), so fluid.grid \
+                 takes the length alone: grid = [nx] (got {})",
+                fluid
+                    .get("grid")
+                    .map_or("no fluid.grid".to_string(), |g| g.to_string())
+            ))
+        }
+    };
+    let exact = lc / c;
+    let ny = (exact + margin).round();
+    let h = ny - margin;
+    if h < 1.0 {
+        return Err(format!(
+            "fluid.confinement = {c}: the gap l_c / C = {exact} is below one lattice node"
+        ));
+    }
+    fluid.insert(
+        "grid".into(),
+        toml::Value::Array(vec![nx.clone(), toml::Value::Integer(ny as i64)]),
+    );
+    fluid.remove(C);
+    let gap = if margin > 0.0 {
+        format!("H = ny - 2 T = {h} = l_c / C")
+    } else {
+        "H = ny = l_c / C".to_string()
+    };
+    out.lines.push(format!(
+        "fluid.confinement = {c} -> fluid.grid = [{nx}, {ny}] ({gap}, l_c = {lc})"
+    ));
+    if (h - exact).abs() > 1e-9 * exact {
+        out.notes.push(format!(
+            "fluid.confinement = {c}: the gap l_c / C = {exact:.4} is rounded to {h} lattice \
+             nodes, so the scene runs at C = {:.6} (the summary's fluid.confinement)",
+            lc / h
+        ));
+    }
+    Ok(())
+}
+
+/// Without `fluid.confinement` the scene's own fluid.grid = [nx, ny, ..] must leave a gap
+/// between the walls' `margin` rows.
+fn check_gap(grid: &[toml::Value], margin: f64) -> Result<(), String> {
+    let [_, ny, ..] = grid else {
+        return Err(
+            "fluid.particle_shear_reynolds needs the gap: fluid.grid = [nx, ny], or \
+                    fluid.grid = [nx] with fluid.confinement"
+                .into(),
+        );
+    };
+    match number(Some(ny)).map(|ny| ny - margin) {
+        Some(h) if h > 0.0 => Ok(()),
+        _ => Err(
+            "fluid.grid: expected [nx, ny] with positive sizes and a gap between the walls".into(),
+        ),
+    }
 }
 
 #[cfg(test)]
