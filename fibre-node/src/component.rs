@@ -248,7 +248,7 @@ impl Component for FibreComponent {
                 param("fibre.N.bending_number", "1", Some("none"), "bead-spring in a wall shear (fpd-lbm or spm): bending number K = 2 k_b / (eta_f gamma l_c^2) (S2023 eq. 18; 0: freely jointed), converted to k_b with fluid.viscosity, the wall shear gamma = (top - bottom) / H (H = ny under fpd-lbm, ny - 2 T between the spm slabs) and l_c = N d; excludes bending_stiffness; reported for every bead-spring fibre in a wall shear"),
                 param("fibre.N.stretch_number", "1", Some("none"), "bead-spring in a wall shear (fpd-lbm or spm): stretch number K_s = k_s / (eta_f V0 l0) (S2023 section II C), converted to k_s with fluid.viscosity, the wall speed V0 = |top - bottom| / 2 and l0 = spacing; excludes stretch_stiffness; reported for every bead-spring fibre in a wall shear"),
                 param("fibre.N.bead_spin", "1", Some("\"free\""), "bead-spring under spm, 2D: \"free\" (each bead spins with the fluid, a train of rollers) or \"chord\" (each bead turns with its bonds, the fluid's torque on it passed to its neighbours as couples: a solid fibre)"),
-                param("fibre.N.exchange", "1", Some("\"explicit\""), "SPM momentum exchange: \"explicit\" (the fluid's impulse added as it comes, L2020 eqs. 35-36; beads must be at least half as heavy as their profile's fluid) or \"implicit\" (the same impulse taken as a drag towards the profile's fluid velocity at the new bead velocity: momentum-conserving with the penalty, stable for light beads and stiff fibres)"),
+                param("fibre.N.exchange", "1", Some("\"explicit\""), "SPM momentum exchange: \"explicit\" (the fluid's impulse added as it comes, L2020 eqs. 35-36; beads must be at least half as heavy as their profile's fluid) or \"implicit\" (the same impulse taken as a drag towards the profile's fluid velocity at the new bead velocity: momentum-conserving with the penalty, stable for light beads and stiff fibres; with one sub-step it moves a bead as the explicit exchange moves a bead of mass M + m_phi, the profile's fluid added to its inertia)"),
                 param("fibre.N.bead_inertia", "1", Some("\"solid\""), "bead moment of inertia: \"solid\" (sharp disc or sphere, as fibre.N.density says) or \"profile\" (density times the moment of the bead's smoothed profile, SPM only); under SPM a bead whose profile fluid has 2 or more times its mass or moment of inertia is refused (explicit exchange limit)"),
                 param("fibre.N.beam_forces", "1", Some("\"paper\""), "cohesive beam: \"paper\" (L2020 eqs. 11-24) or \"energy-consistent\" (the same to leading order, exactly conservative to third order in the bead angles)"),
             ],
@@ -432,6 +432,16 @@ impl Component for FibreComponent {
                 derived.push((format!("{p}.profile_to_bead_mass"), r.mass));
                 derived.push((format!("{p}.profile_to_bead_inertia"), r.inertia));
             }
+            // With one sub-step the implicit exchange moves a bead as the explicit one moves
+            // a bead carrying its profile's fluid (docs/validation/spm.md, "What the implicit
+            // exchange is").
+            if let (Some([m_phi, i_phi]), 1) = (f.implicit_exchange, cfg.substeps) {
+                derived.push((format!("{p}.effective_bead_mass"), f.mass + m_phi));
+                derived.push((
+                    format!("{p}.effective_bead_moment_of_inertia"),
+                    f.inertia + i_phi,
+                ));
+            }
             match &f.model {
                 Model::CohesiveBeam(b) => {
                     derived.push((format!("{p}.axial_stiffness"), b.axial));
@@ -507,6 +517,49 @@ impl Component for FibreComponent {
                     ));
                 }
             }
+        }
+
+        // The implicit exchange takes the drag at the new velocity, which makes the fluid in
+        // a bead's profile part of the bead's inertia: with one sub-step a kick is
+        // algebraically the explicit exchange with mass M + m_phi; with n sub-steps each kick
+        // takes 1/n of the drag, which adds less (docs/validation/spm.md, "What the implicit
+        // exchange is").
+        for (n, f) in fibres.iter().enumerate() {
+            let Some([m_phi, i_phi]) = f.implicit_exchange else {
+                continue;
+            };
+            let cfg = &scene.fibres[n];
+            let per_volume = cfg.density * m_phi / f.mass;
+            let how = if cfg.substeps == 1 {
+                format!(
+                    "its translation is that of a bead of mass M + m_phi = {:.4e} ({:.3} times \
+                     its own: fibre.{n}.density = {} moves as {:.4}) under the explicit \
+                     exchange, its spin that of moment of inertia I + I_phi ({:.3} times). For \
+                     beads of density rho_p above {per_volume:.4}, fibre.{n}.density = rho_p - \
+                     {per_volume:.4} gives their mass; lighter ones have no implicit \
+                     equivalent (the explicit exchange runs beads down to half their profile's \
+                     fluid in mass and moment of inertia)",
+                    f.mass + m_phi,
+                    1.0 + m_phi / f.mass,
+                    cfg.density,
+                    cfg.density + per_volume,
+                    1.0 + i_phi / f.inertia,
+                )
+            } else {
+                format!(
+                    "with one sub-step it would move as a bead of mass M + m_phi ({:.3} times \
+                     its own) under the explicit exchange; with fibre.{n}.substeps = {} each \
+                     kick takes 1/{} of the drag, and the added inertia is less",
+                    1.0 + m_phi / f.mass,
+                    cfg.substeps,
+                    cfg.substeps,
+                )
+            };
+            notes.push(format!(
+                "fibre.{n}.exchange = \"implicit\": the drag at the new velocity makes the fluid \
+                 in each bead's smoothed profile part of the bead's inertia: {how} \
+                 (docs/validation/spm.md, \"What the implicit exchange is\")"
+            ));
         }
 
         let total_beads = fibres.iter().map(|f| f.len()).sum();
