@@ -294,6 +294,16 @@ fn a_seeded_fibre_buckles_only_above_the_slender_body_threshold() {
     assert!(last < 0.1 * seed, "{last}");
 }
 
+/// S2023's Fig. 7 SPM scenes started on the compressional axis (135 deg, centred in the gap)
+/// and run to the vertical: 1600 steps, the last state logged.
+const COMPRESSIONAL_START: [&str; 5] = [
+    "time.steps=1600",
+    "output.interval=1600",
+    "fibre.0.start=[125.5,58.5,0.0]",
+    "fibre.0.direction=[-1.0,1.0,0.0]",
+    "analysis.metrics=[]",
+];
+
 /// S2023's Fig. 7 fibre (K = 3.3) under SPM, started on the compressional axis, at the
 /// output step nearest the vertical (1600 steps, 93 deg): as a cohesive beam, its beads tied
 /// to the beam, it bends as the quasi-static 2D Stokes estimate for a chain of locked discs
@@ -311,16 +321,7 @@ fn a_bead_spring_chain_under_spm_bends_like_rollers_and_a_cohesive_beam_as_stoke
     let (_, moments) = bem::chain_bending_moments(10, 1.0, 64, false);
     let per_load = bem::s_deflection_per_load(&moments);
     let bend = |scene: &str, test: &str, extra: &[String]| {
-        let o = overrides(
-            &[
-                "time.steps=1600",
-                "output.interval=1600",
-                "fibre.0.start=[125.5,58.5,0.0]",
-                "fibre.0.direction=[-1.0,1.0,0.0]",
-                "analysis.metrics=[]",
-            ],
-            extra,
-        );
+        let o = overrides(&COMPRESSIONAL_START, extra);
         let s = run_in_process(&config(scene), &o, test);
         let states = read_topic(&run_dir(test).join("run.mcap"), "/fibre/bead_states").unwrap();
         let p: Vec<(f64, f64)> = states[1]["states"]
@@ -447,16 +448,7 @@ fn a_bead_spring_chain_under_spm_bends_like_rollers_and_a_cohesive_beam_as_stoke
 #[test]
 fn the_implicit_exchange_moves_a_bead_as_the_explicit_one_carrying_its_profiles_fluid() {
     let end = |test: &str, extra: &[String]| {
-        let o = overrides(
-            &[
-                "time.steps=1600",
-                "output.interval=1600",
-                "fibre.0.start=[125.5,58.5,0.0]",
-                "fibre.0.direction=[-1.0,1.0,0.0]",
-                "analysis.metrics=[]",
-            ],
-            extra,
-        );
+        let o = overrides(&COMPRESSIONAL_START, extra);
         let s = run_in_process(&config("spm/s2023_fig7_twin_beam.toml"), &o, test);
         let states = read_topic(&run_dir(test).join("run.mcap"), "/fibre/bead_states").unwrap();
         let xy = |m: &serde_json::Value| -> Vec<(f64, f64)> {

@@ -733,6 +733,13 @@ mod tests {
         Fibre::straight(&s.fibres[0], s.dimensions, s.has_fluid)
     }
 
+    /// A 2D fibre under SPM at time step `dt`, from its `[[fibre]]` keys.
+    pub(super) fn spm_fibre_2d(dt: f64, keys: &str) -> Fibre {
+        fibre(&format!(
+            "dimensions = 2\n[time]\ndt = {dt:?}\n[fluid]\nmethod = \"spm\"\n[[fibre]]\n{keys}"
+        ))
+    }
+
     #[test]
     fn masses() {
         let (m, i) = bead_mass_inertia(2.0, 3.0, false);
@@ -938,12 +945,13 @@ mod tests {
     #[test]
     fn implicit_exchange_is_the_drag_at_the_new_velocity() {
         for (substeps, factor) in [(1usize, 0.2), (4, 1.0 / 16.0)] {
-            let scene = format!(
-                "dimensions = 2\n[time]\ndt = 0.5\n[fluid]\nmethod = \"spm\"\n[[fibre]]\n\
-                 model = \"bead-spring\"\nbeads = 1\nbead_radius = 1\nyoungs_modulus = 5\n\
-                 substeps = {substeps}\n"
+            let mut f = spm_fibre_2d(
+                0.5,
+                &format!(
+                    "model = \"bead-spring\"\nbeads = 1\nbead_radius = 1\nyoungs_modulus = 5\n\
+                     substeps = {substeps}\n"
+                ),
             );
-            let mut f = fibre(&scene);
             let m = f.mass;
             let m_phi = 4.0 * m;
             let i_phi = 4.0 * f.inertia;
@@ -984,16 +992,20 @@ mod tests {
     /// not (docs/validation/spm.md, "What the implicit exchange is").
     #[test]
     fn one_implicit_kick_is_an_explicit_kick_of_a_bead_carrying_its_profiles_fluid() {
-        let scene = "dimensions = 2\n[time]\ndt = 0.5\n[fluid]\nmethod = \"spm\"\n[[fibre]]\n\
-                     model = \"bead-spring\"\nbeads = 4\nbead_radius = 1\nyoungs_modulus = 5\n\
-                     initial_bend = 0.3\n";
-        let mut implicit = fibre(scene);
+        let chain = || {
+            spm_fibre_2d(
+                0.5,
+                "model = \"bead-spring\"\nbeads = 4\nbead_radius = 1\nyoungs_modulus = 5\n\
+                 initial_bend = 0.3\n",
+            )
+        };
+        let mut implicit = chain();
         let (m_phi, i_phi) = (1.09 * implicit.mass, 1.59 * implicit.inertia);
         implicit.implicit_exchange = Some([m_phi, i_phi]);
-        let mut carrying = fibre(scene);
+        let mut carrying = chain();
         carrying.mass += m_phi;
         carrying.inertia += i_phi;
-        let own = fibre(scene);
+        let own = chain();
         let imps: Vec<BeadImpulse> = (0..4)
             .map(|k| {
                 let k = k as f64;
@@ -1039,10 +1051,11 @@ mod tests {
     /// bead 1 (measured; the tolerance is 0.1 L / I, the corrector gives 5e-4 L / I).
     #[test]
     fn fluid_impulses_are_spread_over_the_sub_steps() {
-        let scene = "dimensions = 2\n[time]\ndt = 0.5\n[fluid]\nmethod = \"spm\"\n[[fibre]]\n\
-                     model = \"cohesive-beam\"\nbeads = 2\nbead_radius = 1\nyoungs_modulus = 5\n\
-                     substeps = 4\n";
-        let mut f = fibre(scene);
+        let mut f = spm_fibre_2d(
+            0.5,
+            "model = \"cohesive-beam\"\nbeads = 2\nbead_radius = 1\nyoungs_modulus = 5\n\
+             substeps = 4\n",
+        );
         assert!(f.hydrodynamic && f.substeps == 4);
         let dt = 0.5;
         let l = 1e-3;

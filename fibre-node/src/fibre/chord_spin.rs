@@ -130,7 +130,7 @@ impl Fibre {
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::fibre;
+    use super::super::tests::spm_fibre_2d;
     use super::*;
     use cosim::BeadImpulse;
 
@@ -140,11 +140,13 @@ mod tests {
     /// of its bonds; with free spin the same impulse only spins the beads.
     #[test]
     fn a_chord_locked_chain_takes_the_fluids_torque_into_its_motion() {
-        let scene = |spin: &str| {
-            format!(
-                "dimensions = 2\n[time]\ndt = 1\n[fluid]\nmethod = \"spm\"\n[[fibre]]\n\
-                 model = \"bead-spring\"\nbeads = 4\nbead_radius = 1\nyoungs_modulus = 1\n\
-                 initial_bend = 0.3\nbead_spin = \"{spin}\"\n"
+        let chain = |spin: &str| {
+            spm_fibre_2d(
+                1.0,
+                &format!(
+                    "model = \"bead-spring\"\nbeads = 4\nbead_radius = 1\nyoungs_modulus = 1\n\
+                     initial_bend = 0.3\nbead_spin = \"{spin}\"\n"
+                ),
             )
         };
         let torques = [0.2, -0.05, 0.7, 0.1];
@@ -161,7 +163,7 @@ mod tests {
                 .map(|k| f.pos[k].cross(&(f.mass * f.vel[k])).z)
                 .sum()
         };
-        let mut f = fibre(&scene("chord"));
+        let mut f = chain("chord");
         assert!(f.spin_with_chord);
         let (l0, p0) = (orbital(&f), f.momentum());
         f.advance_velocities(1.0, Some(&imps), false);
@@ -183,7 +185,7 @@ mod tests {
             }
             assert!((f.omega[i].z - rate / bonds).abs() < 1e-15, "bead {i}");
         }
-        let mut free = fibre(&scene("free"));
+        let mut free = chain("free");
         free.advance_velocities(1.0, Some(&imps), false);
         assert!(orbital(&free).abs() < 1e-15);
         assert!((free.omega[2].z - 0.7 / free.inertia).abs() < 1e-15);
@@ -198,9 +200,9 @@ mod tests {
     /// new rates.
     #[test]
     fn a_chord_locked_chain_takes_the_spin_drag_at_its_new_rates() {
-        let mut f = fibre(
-            "dimensions = 2\n[time]\ndt = 1\n[fluid]\nmethod = \"spm\"\n[[fibre]]\n\
-             model = \"bead-spring\"\nbeads = 5\nbead_radius = 1\nyoungs_modulus = 1\n\
+        let mut f = spm_fibre_2d(
+            1.0,
+            "model = \"bead-spring\"\nbeads = 5\nbead_radius = 1\nyoungs_modulus = 1\n\
              density = 0.1\ninitial_bend = 0.3\nbead_spin = \"chord\"\nexchange = \"implicit\"\n",
         );
         let (m_phi, i_phi) = (10.0 * f.mass, 10.0 * f.inertia);
