@@ -327,6 +327,7 @@ impl Component for FibreComponent {
         let mut fibres = Vec::with_capacity(scene.fibres.len());
         let mut limits = Vec::new();
         let mut derived = Vec::new();
+        let mut notes = Vec::new();
         let fpd = scene.coupling == Coupling::Fpd;
         for (n, cfg) in scene.fibres.iter().enumerate() {
             if fpd {
@@ -435,12 +436,15 @@ impl Component for FibreComponent {
             // With one sub-step the implicit exchange moves a bead as the explicit one moves
             // a bead carrying its profile's fluid (docs/validation/spm.md, "What the implicit
             // exchange is").
-            if let (Some([m_phi, i_phi]), 1) = (f.implicit_exchange, cfg.substeps) {
-                derived.push((format!("{p}.effective_bead_mass"), f.mass + m_phi));
-                derived.push((
-                    format!("{p}.effective_bead_moment_of_inertia"),
-                    f.inertia + i_phi,
-                ));
+            if let Some([m_phi, i_phi]) = f.implicit_exchange {
+                if cfg.substeps == 1 {
+                    derived.push((format!("{p}.effective_bead_mass"), f.mass + m_phi));
+                    derived.push((
+                        format!("{p}.effective_bead_moment_of_inertia"),
+                        f.inertia + i_phi,
+                    ));
+                }
+                notes.push(implicit_exchange_note(n, cfg, &f, [m_phi, i_phi]));
             }
             match &f.model {
                 Model::CohesiveBeam(b) => {
@@ -496,7 +500,6 @@ impl Component for FibreComponent {
         // Bead-spring beads feel no torque from their neighbours, so under SPM, where each
         // bead is a rigid body turning with the fluid, the chain is a train of rollers
         // (docs/validation/spm.md, "Flexible versus rigid"; fpd.md, "S2023's Fig. 7 scene").
-        let mut notes = Vec::new();
         if scene.coupling == Coupling::Spm {
             for (n, f) in fibres.iter().enumerate() {
                 if matches!(f.model, Model::BeadSpring(_))
@@ -517,49 +520,6 @@ impl Component for FibreComponent {
                     ));
                 }
             }
-        }
-
-        // The implicit exchange takes the drag at the new velocity, which makes the fluid in
-        // a bead's profile part of the bead's inertia: with one sub-step a kick is
-        // algebraically the explicit exchange with mass M + m_phi; with n sub-steps each kick
-        // takes 1/n of the drag, which adds less (docs/validation/spm.md, "What the implicit
-        // exchange is").
-        for (n, f) in fibres.iter().enumerate() {
-            let Some([m_phi, i_phi]) = f.implicit_exchange else {
-                continue;
-            };
-            let cfg = &scene.fibres[n];
-            let per_volume = cfg.density * m_phi / f.mass;
-            let how = if cfg.substeps == 1 {
-                format!(
-                    "its translation is that of a bead of mass M + m_phi = {:.4e} ({:.3} times \
-                     its own: fibre.{n}.density = {} moves as {:.4}) under the explicit \
-                     exchange, its spin that of moment of inertia I + I_phi ({:.3} times). For \
-                     beads of density rho_p above {per_volume:.4}, fibre.{n}.density = rho_p - \
-                     {per_volume:.4} gives their mass; lighter ones have no implicit \
-                     equivalent (the explicit exchange runs beads down to half their profile's \
-                     fluid in mass and moment of inertia)",
-                    f.mass + m_phi,
-                    1.0 + m_phi / f.mass,
-                    cfg.density,
-                    cfg.density + per_volume,
-                    1.0 + i_phi / f.inertia,
-                )
-            } else {
-                format!(
-                    "with one sub-step it would move as a bead of mass M + m_phi ({:.3} times \
-                     its own) under the explicit exchange; with fibre.{n}.substeps = {} each \
-                     kick takes 1/{} of the drag, and the added inertia is less",
-                    1.0 + m_phi / f.mass,
-                    cfg.substeps,
-                    cfg.substeps,
-                )
-            };
-            notes.push(format!(
-                "fibre.{n}.exchange = \"implicit\": the drag at the new velocity makes the fluid \
-                 in each bead's smoothed profile part of the bead's inertia: {how} \
-                 (docs/validation/spm.md, \"What the implicit exchange is\")"
-            ));
         }
 
         let total_beads = fibres.iter().map(|f| f.len()).sum();
@@ -824,6 +784,49 @@ impl Component for FibreComponent {
 }
 
 /// What the FPD coupling cannot carry, refused before step 0 with the reason.
+/// What the implicit exchange does to fibre `n`'s beads: the drag at the new velocity makes
+/// the fluid in a bead's profile (`[m_phi, I_phi]`) part of the bead's inertia. With one
+/// sub-step a kick is algebraically the explicit exchange with mass M + m_phi; with n
+/// sub-steps each kick takes 1/n of the drag, which adds less (docs/validation/spm.md, "What
+/// the implicit exchange is").
+fn implicit_exchange_note(
+    n: usize,
+    cfg: &crate::config::FibreConfig,
+    f: &Fibre,
+    [m_phi, i_phi]: [f64; 2],
+) -> String {
+    let per_volume = cfg.density * m_phi / f.mass;
+    let how = if cfg.substeps == 1 {
+        format!(
+            "its translation is that of a bead of mass M + m_phi = {:.4e} ({:.3} times its own: \
+             fibre.{n}.density = {} moves as {:.4}) under the explicit exchange, its spin that \
+             of moment of inertia I + I_phi ({:.3} times). For beads of density rho_p above \
+             {per_volume:.4}, fibre.{n}.density = rho_p - {per_volume:.4} gives their mass; \
+             lighter ones have no implicit equivalent (the explicit exchange runs beads down to \
+             half their profile's fluid in mass and moment of inertia)",
+            f.mass + m_phi,
+            1.0 + m_phi / f.mass,
+            cfg.density,
+            cfg.density + per_volume,
+            1.0 + i_phi / f.inertia,
+        )
+    } else {
+        format!(
+            "with one sub-step it would move as a bead of mass M + m_phi ({:.3} times its own) \
+             under the explicit exchange; with fibre.{n}.substeps = {} each kick takes 1/{} of \
+             the drag, and the added inertia is less",
+            1.0 + m_phi / f.mass,
+            cfg.substeps,
+            cfg.substeps,
+        )
+    };
+    format!(
+        "fibre.{n}.exchange = \"implicit\": the drag at the new velocity makes the fluid in each \
+         bead's smoothed profile part of the bead's inertia: {how} (docs/validation/spm.md, \
+         \"What the implicit exchange is\")"
+    )
+}
+
 fn check_fpd_fibre(n: usize, cfg: &crate::config::FibreConfig) -> Result<(), String> {
     if cfg.model == ModelKind::CohesiveBeam {
         return Err(format!(
