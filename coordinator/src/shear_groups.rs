@@ -130,10 +130,12 @@ pub fn supersede(scene: &mut toml::Table, path: &str) -> Option<String> {
     }
 }
 
+/// The `[fluid]` key of S2023's confinement C = l_c / H.
+const C: &str = "confinement";
+
 /// Replace `fluid.confinement` and `fluid.particle_shear_reynolds` in `scene` by the keys
 /// they set. A scene with neither is left as it is.
 pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
-    const C: &str = "confinement";
     const RE: &str = "particle_shear_reynolds";
     let mut out = Resolved::default();
     let Some(toml::Value::Table(fluid)) = scene.get("fluid") else {
@@ -205,7 +207,6 @@ fn set_gap(
     grid: &[toml::Value],
     out: &mut Resolved,
 ) -> Result<(), String> {
-    const C: &str = "confinement";
     if two_d == Some(false) {
         return Err(
             "fluid.confinement sets the gap of a 2D scene (S2023 are 2D): a 3D scene gives \
