@@ -215,17 +215,22 @@ fn jeffery_period_of_a_three_bead_chain_against_2d_stokes() {
 
 /// Largest distance of a bead from the end-to-end line, and end-to-end distance, per logged
 /// state (2D, grid spacings).
+/// The (x, y) bead positions of one `/fibre/bead_states` message.
+fn bead_xy(message: &serde_json::Value) -> Vec<(f64, f64)> {
+    message["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| (b[0].as_f64().unwrap(), b[1].as_f64().unwrap()))
+        .collect()
+}
+
 fn chord_shape(dir: &std::path::Path) -> Vec<(f64, f64)> {
     read_topic(&dir.join("run.mcap"), "/fibre/bead_states")
         .unwrap()
         .iter()
         .map(|s| {
-            let xs: Vec<(f64, f64)> = s["states"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|b| (b[0].as_f64().unwrap(), b[1].as_f64().unwrap()))
-                .collect();
+            let xs = bead_xy(s);
             let (a, b) = (xs[0], xs[xs.len() - 1]);
             let len = ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt();
             let off = xs
@@ -324,12 +329,7 @@ fn a_bead_spring_chain_under_spm_bends_like_rollers_and_a_cohesive_beam_as_stoke
         let o = overrides(&COMPRESSIONAL_START, extra);
         let s = run_in_process(&config(scene), &o, test);
         let states = read_topic(&run_dir(test).join("run.mcap"), "/fibre/bead_states").unwrap();
-        let p: Vec<(f64, f64)> = states[1]["states"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|b| (b[0].as_f64().unwrap(), b[1].as_f64().unwrap()))
-            .collect();
+        let p = bead_xy(&states[1]);
         let ((x0, y0), (x1, y1)) = (p[0], p[p.len() - 1]);
         let chord = (x1 - x0).hypot(y1 - y0);
         let sag = p
@@ -451,15 +451,7 @@ fn the_implicit_exchange_moves_a_bead_as_the_explicit_one_carrying_its_profiles_
         let o = overrides(&COMPRESSIONAL_START, extra);
         let s = run_in_process(&config("spm/s2023_fig7_twin_beam.toml"), &o, test);
         let states = read_topic(&run_dir(test).join("run.mcap"), "/fibre/bead_states").unwrap();
-        let xy = |m: &serde_json::Value| -> Vec<(f64, f64)> {
-            m["states"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|b| (b[0].as_f64().unwrap(), b[1].as_f64().unwrap()))
-                .collect()
-        };
-        (s, xy(&states[0]), xy(&states[1]))
+        (s, bead_xy(&states[0]), bead_xy(&states[1]))
     };
     let (s, start, implicit) = end("spm-implicit-heavy", &["fibre.0.density=3.0".into()]);
     let d = &s["derived"];
