@@ -128,10 +128,7 @@ fn contact_angle_run(affinity: f64, steps: u64, test: &str) -> ContactRun {
     assert_eq!(s["status"], "completed", "{s}");
     let m = &s["metrics"]["contact_angle_deg"];
     // run_in_process wrote into out_dir(test) (calling out_dir again would empty it).
-    let dir = root()
-        .join("target")
-        .join("test-runs")
-        .join(format!("{test}-{}", std::process::id()));
+    let dir = run_dir(test);
     let log = read_topic(&dir.join("run.mcap"), "/diagnostics").unwrap();
     let first = log[0]["mean_psi"].as_f64().unwrap();
     let mut mass_drift: f64 = 0.0;
@@ -225,10 +222,7 @@ fn contact_angle_40_deg_within_3_deg_at_the_scene_resolution() {
         m["value"].as_f64().unwrap(),
         m["reference"].as_f64().unwrap(),
     );
-    let dir = root()
-        .join("target")
-        .join("test-runs")
-        .join(format!("{test}-{}", std::process::id()));
+    let dir = run_dir(test);
     let log = read_topic(&dir.join("run.mcap"), "/diagnostics").unwrap();
     let at = |i: usize| log[i]["contact_angle_deg"].as_f64().unwrap();
     let (before, last) = (at(log.len() - 2), at(log.len() - 1));

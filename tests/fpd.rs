@@ -10,11 +10,9 @@ fn run_cli(name: &str, overrides: &[&str], extra: &[&str]) -> Result<std::path::
 }
 
 fn angle(state: &serde_json::Value) -> f64 {
-    let s = state["states"].as_array().unwrap();
-    let (a, b) = (&s[0], &s[s.len() - 1]);
-    let dx = b[0].as_f64().unwrap() - a[0].as_f64().unwrap();
-    let dy = b[1].as_f64().unwrap() - a[1].as_f64().unwrap();
-    dy.atan2(dx).to_degrees()
+    let p = bead_xy(state);
+    let (a, b) = (p[0], p[p.len() - 1]);
+    (b.1 - a.1).atan2(b.0 - a.0).to_degrees()
 }
 
 /// Three processes and one process give the same bits, and the fibre, started across the
@@ -296,24 +294,17 @@ fn fpd_hard_case_stays_bounded() {
     assert_eq!(s["status"], "completed");
     let mach = s["final_diagnostics"]["max_mach"].as_f64().unwrap();
     assert!(mach < 0.1, "max Mach {mach}");
-    let dir = root()
-        .join("target")
-        .join("test-runs")
-        .join(format!("{name}-{}", std::process::id()));
+    let dir = run_dir(name);
     let states = read_topic(&dir.join("run.mcap"), "/fibre/bead_states").unwrap();
-    let last = states.last().unwrap()["states"].as_array().unwrap();
-    let p: Vec<[f64; 2]> = last
-        .iter()
-        .map(|b| [b[0].as_f64().unwrap(), b[1].as_f64().unwrap()])
-        .collect();
+    let p = bead_xy(states.last().unwrap());
     for (i, q) in p.iter().enumerate() {
         assert!(
-            q[0].is_finite() && q[1] > -0.5 && q[1] < 43.5,
+            q.0.is_finite() && q.1 > -0.5 && q.1 < 43.5,
             "bead {i} at {q:?}"
         );
     }
     for w in p.windows(2) {
-        let l = (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+        let l = (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1);
         assert!((l - 8.0).abs() < 0.4, "bond length {l}");
     }
     println!("hard case: orbit {}", s["metrics"]["orbit"]["label"]);
@@ -613,18 +604,10 @@ fn held_cylinder_drag_against_dennis_and_chang() {
         (cd / reference - 1.0).abs() < 0.06,
         "C_D {cd} vs {reference}"
     );
-    let dir = root()
-        .join("target")
-        .join("test-runs")
-        .join(format!("fpd-cylinder-re10-{}", std::process::id()));
+    let dir = run_dir("fpd-cylinder-re10");
     let states = read_topic(&dir.join("run.mcap"), "/fibre/bead_states").unwrap();
     for st in &states {
-        let b = &st["states"][0];
-        assert_eq!(
-            (b[0].as_f64().unwrap(), b[1].as_f64().unwrap()),
-            (48.0, 63.5),
-            "the held bead moved"
-        );
+        assert_eq!(bead_xy(st)[0], (48.0, 63.5), "the held bead moved");
     }
     let s20 = small("fluid.viscosity=0.01", "fpd-cylinder-re20");
     let (cd20, reference20) = metric(&s20, "drag_coefficient");

@@ -215,16 +215,6 @@ fn jeffery_period_of_a_three_bead_chain_against_2d_stokes() {
 
 /// Largest distance of a bead from the end-to-end line, and end-to-end distance, per logged
 /// state (2D, grid spacings).
-/// The (x, y) bead positions of one `/fibre/bead_states` message.
-fn bead_xy(message: &serde_json::Value) -> Vec<(f64, f64)> {
-    message["states"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|b| (b[0].as_f64().unwrap(), b[1].as_f64().unwrap()))
-        .collect()
-}
-
 fn chord_shape(dir: &std::path::Path) -> Vec<(f64, f64)> {
     read_topic(&dir.join("run.mcap"), "/fibre/bead_states")
         .unwrap()

@@ -52,6 +52,16 @@ pub fn run_in_process(cfg: &Path, overrides: &[String], test: &str) -> serde_jso
         .summary
 }
 
+/// The (x, y) bead positions of one `/fibre/bead_states` message (grid spacings).
+pub fn bead_xy(message: &serde_json::Value) -> Vec<(f64, f64)> {
+    message["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| (b[0].as_f64().unwrap(), b[1].as_f64().unwrap()))
+        .collect()
+}
+
 pub fn metric(summary: &serde_json::Value, name: &str) -> (f64, f64) {
     let m = &summary["metrics"][name];
     (
