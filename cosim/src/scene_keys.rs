@@ -128,20 +128,55 @@ pub struct WallShear {
 /// (default [`DEFAULT_WALL_THICKNESS`]) for SPM. Read, not validated: the fluid node checks
 /// these keys itself.
 pub fn wall_margin(table: &toml::Table) -> f64 {
+    slab_thickness(table).map_or(0.0, |t| 2.0 * t)
+}
+
+/// `walls.thickness` (default [`DEFAULT_WALL_THICKNESS`]) of an SPM scene; `None` for
+/// `fluid.method = "fpd-lbm"`, whose walls are the lattice's edges.
+fn slab_thickness(table: &toml::Table) -> Option<f64> {
     let fpd = table
         .get("fluid")
         .and_then(|f| f.get("method"))
         .and_then(|m| m.as_str())
         == Some("fpd-lbm");
-    if fpd {
-        return 0.0;
+    (!fpd).then(|| {
+        table
+            .get("walls")
+            .and_then(|w| w.get("thickness"))
+            .and_then(number)
+            .unwrap_or(DEFAULT_WALL_THICKNESS)
+    })
+}
+
+/// y of the inner faces (phi = 1/2) of SPM's two wall slabs of thickness `t` in a grid of
+/// `ny` rows: halfway between nodes, `T - 1/2` and `ny - T - 1/2` (fluid-node `walls`).
+pub fn slab_faces(ny: f64, t: f64) -> [f64; 2] {
+    [t - 0.5, ny - t - 0.5]
+}
+
+/// y of FPD's half-way bounce-back walls on a lattice of `ny` rows: half a spacing outside
+/// the first and the last row.
+pub fn bounce_back_faces(ny: f64) -> [f64; 2] {
+    [-0.5, ny - 0.5]
+}
+
+/// y of the bottom and the top wall's face of a scene with `[walls]` ([`slab_faces`] under
+/// SPM, [`bounce_back_faces`] under FPD); `None` without walls or without `fluid.grid`'s
+/// ny. Read, not validated, as [`wall_margin`].
+pub fn wall_faces(table: &toml::Table) -> Option<[f64; 2]> {
+    if !table.contains_key("walls") {
+        return None;
     }
-    let thickness = table
-        .get("walls")
-        .and_then(|w| w.get("thickness"))
-        .and_then(number)
-        .unwrap_or(DEFAULT_WALL_THICKNESS);
-    2.0 * thickness
+    let ny = table
+        .get("fluid")
+        .and_then(|f| f.get("grid"))
+        .and_then(|g| g.as_array())
+        .and_then(|g| g.get(1))
+        .and_then(number)?;
+    Some(match slab_thickness(table) {
+        Some(t) => slab_faces(ny, t),
+        None => bounce_back_faces(ny),
+    })
 }
 
 /// A TOML number, integer or float.
@@ -208,6 +243,12 @@ mod wall_shear_tests {
         assert_eq!(wall_margin(&fpd), 0.0);
         let thick = parse_table(&format!("{SPM}thickness = 9\n")).unwrap();
         assert_eq!(wall_shear(&thick, "k").unwrap().gap, 150.0);
+        // The faces the gap lies between.
+        assert_eq!(wall_faces(&spm), Some([3.5, 163.5]));
+        assert_eq!(wall_faces(&fpd), Some([-0.5, 159.5]));
+        assert_eq!(wall_faces(&thick), Some([8.5, 158.5]));
+        let open = parse_table("[fluid]\nmethod = \"spm\"\ngrid = [200, 168]\n").unwrap();
+        assert_eq!(wall_faces(&open), None);
     }
 
     #[test]

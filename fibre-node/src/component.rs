@@ -4,6 +4,7 @@ use crate::fibre::{BeadKinematics, Fibre, Model};
 use crate::quaternion::{from_array, to_array, Vec3};
 use crate::spm_exchange;
 use crate::stability::{fpd_margin, fpd_stiffness_limit, stability_limit, SAFETY};
+use crate::wall_contact::overlaps;
 use cosim::description::{parameter as param, ModelDescription, PortDescription};
 use cosim::profile::DEFAULT_FPD_INTERFACE_RATIO;
 use cosim::{
@@ -13,7 +14,7 @@ use cosim::{
 use serde::{Deserialize, Serialize};
 
 /// Names of the diagnostics of every [`PhaseReport`], in their fixed order.
-pub const DIAGNOSTICS: [&str; 8] = [
+pub const DIAGNOSTICS: [&str; 9] = [
     "kinetic_energy",
     "stretch_energy",
     "bend_energy",
@@ -22,6 +23,7 @@ pub const DIAGNOSTICS: [&str; 8] = [
     "elastic_energy",
     "max_speed",
     "max_net_force",
+    "wall_overlap",
 ];
 
 /// Tag of the saved-state format.
@@ -155,6 +157,16 @@ impl Run {
             vmax = vmax.max(f.max_speed());
             fmax = fmax.max(f.max_net_force());
         }
+        // How far the deepest bead's sphere reaches past a wall's face (0 without walls).
+        let mut overlap: f64 = 0.0;
+        if let Some(faces) = self.scene.wall_faces {
+            for (f, cfg) in self.fibres.iter().zip(&self.scene.fibres) {
+                for p in &f.pos {
+                    let [bottom, top] = overlaps(faces, cfg.bead_radius, p.y);
+                    overlap = overlap.max(bottom).max(top);
+                }
+            }
+        }
         let values = [
             ke,
             e.stretch,
@@ -164,6 +176,7 @@ impl Run {
             e.total(),
             vmax,
             fmax,
+            overlap,
         ];
         PhaseReport {
             diagnostics: DIAGNOSTICS
@@ -233,6 +246,7 @@ impl Component for FibreComponent {
                 param("fibre.N.direction", "1", Some("[1.0, 0.0, 0.0]"), "direction of the straight initial fibre (normalised; z = 0 in 2D)"),
                 param("fibre.N.spacing", len, Some("2 bead_radius"), "initial and rest distance between neighbouring beads"),
                 param("fibre.N.self_contact", "1", Some("false"), "true: beads that are not neighbours along the chain repel while their spheres overlap, with the fibre's axial bond stiffness (excluded volume; neither paper has it, so off by default)"),
+                param("fibre.N.wall_contact", "1", Some("false"), "true (scenes with walls): a bead whose sphere reaches past a wall's face is pushed back along the wall's normal, with the fibre's axial bond stiffness (frictionless; neither paper has it, so off by default; without it an SPM bead can sink into a wall slab: watch the wall_overlap diagnostic)"),
                 param("fibre.N.initial_bend", len, Some("0.0"), "amplitude of an S-shaped initial offset across direction (one sine wave along the fibre): seeds buckling; the fibre is at rest but not stress-free"),
                 param("fibre.N.clamp", "1", Some("[]"), "indices of clamped beads (negative counts from the end): fixed position and orientation; under fpd-lbm held in place by a proportional-integral force (its steady value is minus the drag)"),
                 param("fibre.N.loads", "1", Some("[]"), "constant point loads: tables { bead, force, torque }"),

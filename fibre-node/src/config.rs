@@ -61,6 +61,9 @@ pub struct FibreConfig {
     pub initial_bend: f64,
     /// Non-neighbouring beads repel while they overlap ([`crate::self_contact`]).
     pub self_contact: bool,
+    /// `fibre.N.wall_contact = true`: the y of the bottom and the top wall's face, which the
+    /// beads are kept behind ([`crate::wall_contact`]); `None` without it.
+    pub wall_contact: Option<[f64; 2]>,
     /// Resolved, sorted, without duplicates.
     pub clamp: Vec<usize>,
     pub loads: Vec<LoadConfig>,
@@ -112,6 +115,9 @@ pub struct SceneConfig {
     pub spm_profile: Option<SmoothedProfile>,
     /// Under FPD with sheared walls: the shear S2023's groups are defined on.
     pub shear_flow: Option<ShearFlow>,
+    /// y of the bottom and the top wall's face, where the scene has walls
+    /// ([`cosim::scene_keys::wall_faces`]): the `wall_overlap` diagnostic measures from them.
+    pub wall_faces: Option<[f64; 2]>,
     pub fibres: Vec<FibreConfig>,
 }
 
@@ -165,6 +171,8 @@ struct RawFibre {
     initial_bend: Option<f64>,
     #[serde(default)]
     self_contact: bool,
+    #[serde(default)]
+    wall_contact: bool,
     #[serde(default)]
     clamp: Vec<i64>,
     #[serde(default)]
@@ -320,6 +328,7 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         fibres.push(validate_fibre(&prefix, raw, dimensions)?);
     }
 
+    let wall_faces = scene_keys::wall_faces(&table);
     for (n, f) in fibres.iter_mut().enumerate() {
         if f.implicit_exchange && coupling != Coupling::Spm {
             return Err(format!(
@@ -341,6 +350,12 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
             ));
         }
         let p = format!("fibre.{n}");
+        if f.wall_contact.is_some() {
+            f.wall_contact = Some(wall_faces.ok_or(format!(
+                "{p}.wall_contact = true keeps the beads behind the walls' faces, so it needs \
+                 walls: a [walls] table and fluid.grid = [nx, ny]; remove the key"
+            ))?);
+        }
         if f.centred {
             f.start = centre_in_gap(&table, &p, f)?;
         }
@@ -365,6 +380,7 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         shear_flow: (coupling != Coupling::None)
             .then(|| shear_flow(&table, "").ok())
             .flatten(),
+        wall_faces,
         fibres,
     })
 }
@@ -706,6 +722,8 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         spacing,
         initial_bend,
         self_contact: raw.self_contact,
+        // The faces, from the scene's walls, are filled in by `parse_scene`.
+        wall_contact: raw.wall_contact.then_some([f64::NAN; 2]),
         centred: raw.centred,
         clamp,
         loads,
@@ -851,6 +869,27 @@ youngs_modulus = 1.0
             let e = err(&scene);
             assert!(e.contains(why), "{e}\n(expected `{why}`)");
         }
+    }
+
+    /// `wall_contact = true` takes the walls' faces from the scene (FPD: the bounce-back
+    /// walls of the 160-row lattice; SPM: the faces of 4-row slabs), and is refused without
+    /// walls. Every scene with walls carries the faces for the `wall_overlap` diagnostic.
+    #[test]
+    fn wall_contact_reads_the_faces_of_the_scenes_walls() {
+        let fpd = parse_scene(&format!("{FPD_SHEAR}wall_contact = true\n")).unwrap();
+        assert_eq!(fpd.fibres[0].wall_contact, Some([-0.5, 159.5]));
+        let spm = FPD_SHEAR.replace("\"fpd-lbm\"", "\"spm\"");
+        let s = parse_scene(&format!("{spm}wall_contact = true\n")).unwrap();
+        assert_eq!(s.fibres[0].wall_contact, Some([3.5, 155.5]));
+        let off = parse_scene(&spm).unwrap();
+        assert_eq!(off.fibres[0].wall_contact, None);
+        assert_eq!(off.wall_faces, Some([3.5, 155.5]));
+        let e = err(&with("wall_contact = true"));
+        assert!(
+            e.contains("fibre.0.wall_contact = true") && e.contains("needs walls"),
+            "{e}"
+        );
+        assert_eq!(parse_scene(BASE).unwrap().wall_faces, None);
     }
 
     /// K = 0, S2023's freely jointed limit, gives k_b = 0, as `bending_stiffness = 0` does; a

@@ -9,7 +9,8 @@ pub struct Energies {
     pub bend: f64,
     /// Torsion (L2020 eqs. 19-20). Zero in 2D and for the bead-spring model.
     pub twist: f64,
-    /// Overlap of non-neighbouring beads (`fibre.N.self_contact`; zero without it).
+    /// Overlap of non-neighbouring beads (`fibre.N.self_contact`) and of beads with the walls
+    /// (`fibre.N.wall_contact`); zero without either.
     pub contact: f64,
 }
 

@@ -65,6 +65,7 @@ use crate::config::{FibreConfig, ModelKind};
 use crate::energies::Energies;
 use crate::quaternion::{advance, beam_frame, identity, Quat, Vec3};
 use crate::self_contact::SelfContact;
+use crate::wall_contact::WallContact;
 use cosim::{BeadImpulse, BeadState};
 use std::f64::consts::PI;
 
@@ -121,6 +122,8 @@ pub struct Fibre {
     pub energies: Energies,
     /// Excluded volume between non-neighbouring beads (`fibre.N.self_contact`).
     pub self_contact: Option<SelfContact>,
+    /// Beads kept behind the walls' faces (`fibre.N.wall_contact`).
+    pub wall_contact: Option<WallContact>,
     /// Whether hydrodynamic impulses act (the scene has a fluid).
     pub hydrodynamic: bool,
     /// The previous step's hydrodynamic impulse per bead: the predictor's force times dt
@@ -266,12 +269,19 @@ impl Fibre {
                 (Model::BeadSpring(m), identity(), with_fluid, false)
             }
         };
-        let self_contact = cfg.self_contact.then(|| SelfContact {
-            stiffness: match &model {
-                Model::CohesiveBeam(b) => b.axial,
-                Model::BeadSpring(b) => b.k_s / (b.rest_length * b.rest_length),
-            },
+        // Both contacts have the axial bond stiffness (`crate::self_contact`).
+        let contact_stiffness = match &model {
+            Model::CohesiveBeam(b) => b.axial,
+            Model::BeadSpring(b) => b.k_s / (b.rest_length * b.rest_length),
+        };
+        let self_contact = cfg.self_contact.then_some(SelfContact {
+            stiffness: contact_stiffness,
             diameter: 2.0 * cfg.bead_radius,
+        });
+        let wall_contact = cfg.wall_contact.map(|faces| WallContact {
+            stiffness: contact_stiffness,
+            radius: cfg.bead_radius,
+            faces,
         });
         let mut clamped = vec![false; n];
         for &c in &cfg.clamp {
@@ -318,6 +328,7 @@ impl Fibre {
             torque: vec![Vec3::zeros(); n],
             energies: Energies::default(),
             self_contact,
+            wall_contact,
             hydrodynamic: with_fluid,
             predicted_impulse: vec![Vec3::zeros(); n],
             predicted_angular_impulse: vec![Vec3::zeros(); n],
@@ -381,6 +392,9 @@ impl Fibre {
         };
         if let Some(c) = &self.self_contact {
             self.energies.contact = c.add_forces(&self.pos, &mut self.force);
+        }
+        if let Some(c) = &self.wall_contact {
+            self.energies.contact += c.add_forces(&self.pos, &mut self.force);
         }
     }
 

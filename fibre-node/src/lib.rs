@@ -4,6 +4,7 @@
 //! - [`bead_spring`]: S2023 bead-spring chain (stretch, bend), 2D or 3D;
 //! - [`fibre`]: one fibre's state, bead mass and inertia, the split symplectic integrator;
 //! - [`self_contact`]: optional excluded volume between non-neighbouring beads;
+//! - [`wall_contact`]: optional contact of the beads with the walls' faces;
 //! - [`stability`]: the beam-stiffness time-step limit;
 //! - [`config`]: the `[[fibre]]` part of a scene;
 //! - [`component`]: [`FibreComponent`], the [`cosim::Component`] the executable serves;
@@ -18,6 +19,7 @@ pub mod quaternion;
 pub mod self_contact;
 pub mod spm_exchange;
 pub mod stability;
+pub mod wall_contact;
 
 pub use component::{FibreComponent, DIAGNOSTICS};
 pub use config::{parse_scene, Coupling, FibreConfig, ModelKind, SceneConfig};

@@ -452,10 +452,13 @@ impl FpdRun {
                 dims: 2,
                 size: [scene.nx as f64, scene.ny as f64, 1.0],
                 periodic: [true, scene.walls.is_none(), false],
-                walls: scene.walls.map(|_| WallFaces {
-                    bottom: -0.5,
-                    top: scene.ny as f64 - 0.5,
-                    wrap_y: false,
+                walls: scene.walls.map(|_| {
+                    let [bottom, top] = cosim::scene_keys::bounce_back_faces(scene.ny as f64);
+                    WallFaces {
+                        bottom,
+                        top,
+                        wrap_y: false,
+                    }
                 }),
             },
             beads_per_fibre: scene.beads.clone(),

@@ -34,7 +34,7 @@ pub struct Walls {
 impl Walls {
     pub fn new(ny: usize, cfg: &WallsConfig, xi: f64, cutoff: f64) -> Self {
         let t = cfg.thickness;
-        let (bottom_face, top_face) = (t - 0.5, ny as f64 - t - 0.5);
+        let [bottom_face, top_face] = cosim::scene_keys::slab_faces(ny as f64, t);
         let middle = 0.5 * (bottom_face + top_face);
         let mut phi = Vec::with_capacity(ny);
         let mut speed = Vec::with_capacity(ny);
