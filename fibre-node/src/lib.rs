@@ -15,6 +15,8 @@ pub mod component;
 pub mod config;
 pub mod energies;
 pub mod fibre;
+#[cfg(test)]
+mod gradient_check;
 pub mod quaternion;
 pub mod self_contact;
 pub mod spm_exchange;

@@ -50,6 +50,7 @@ impl WallContact {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gradient_check::assert_force_is_minus_the_gradient;
 
     fn contact() -> WallContact {
         WallContact {
@@ -78,23 +79,7 @@ mod tests {
         let e0 = c.add_forces(&pos, &mut force);
         // 0.8, 0.6 and 3.5 reach into the walls: (k / 2) (0.64 + 0.36 + 12.25).
         assert!((e0 - 1.25 * 13.25).abs() < 1e-12, "{e0}");
-        let h = 1e-6;
-        for b in 0..pos.len() {
-            for k in 0..3 {
-                let energy_at = |s: f64| {
-                    let mut p = pos.clone();
-                    p[b][k] += s;
-                    c.add_forces(&p, &mut vec![Vec3::zeros(); p.len()])
-                };
-                let grad = (energy_at(h) - energy_at(-h)) / (2.0 * h);
-                assert!(
-                    (force[b][k] + grad).abs() < 1e-7,
-                    "bead {b} axis {k}: force {} against -dU/dx {}",
-                    force[b][k],
-                    -grad
-                );
-            }
-        }
+        assert_force_is_minus_the_gradient(&pos, |p, f| c.add_forces(p, f));
     }
 
     #[test]
