@@ -315,6 +315,7 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         return Err("fibre: the scene's fibre list is empty".into());
     }
 
+    let wall_faces = scene_keys::wall_faces(&table);
     let mut fibres = Vec::with_capacity(list.len());
     for (n, v) in list.into_iter().enumerate() {
         let prefix = format!("fibre.{n}");
@@ -325,10 +326,9 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
             ));
         }
         let raw: RawFibre = deserialize(&prefix, v)?;
-        fibres.push(validate_fibre(&prefix, raw, dimensions)?);
+        fibres.push(validate_fibre(&prefix, raw, dimensions, wall_faces)?);
     }
 
-    let wall_faces = scene_keys::wall_faces(&table);
     for (n, f) in fibres.iter_mut().enumerate() {
         if f.implicit_exchange && coupling != Coupling::Spm {
             return Err(format!(
@@ -350,12 +350,6 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
             ));
         }
         let p = format!("fibre.{n}");
-        if f.wall_contact.is_some() {
-            f.wall_contact = Some(wall_faces.ok_or(format!(
-                "{p}.wall_contact = true keeps the beads behind the walls' faces, so it needs \
-                 walls: a [walls] table and fluid.grid = [nx, ny]; remove the key"
-            ))?);
-        }
         if f.centred {
             f.start = centre_in_gap(&table, &p, f)?;
         }
@@ -537,7 +531,14 @@ fn switch(p: &str, key: &str, value: &str, values: [&str; 2]) -> Result<bool, St
     }
 }
 
-fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, String> {
+/// `wall_faces`: the y of the bottom and the top wall's face when the scene has walls
+/// ([`scene_keys::wall_faces`]), which `wall_contact = true` needs.
+fn validate_fibre(
+    p: &str,
+    raw: RawFibre,
+    dims: u8,
+    wall_faces: Option<[f64; 2]>,
+) -> Result<FibreConfig, String> {
     let model = match raw.model.as_str() {
         "cohesive-beam" => ModelKind::CohesiveBeam,
         "bead-spring" => ModelKind::BeadSpring,
@@ -566,6 +567,16 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
     let shear_modulus = match raw.shear_modulus {
         Some(g) => positive(&format!("{p}.shear_modulus"), g)?,
         None => youngs_modulus / (2.0 * (1.0 + DEFAULT_POISSON_RATIO)),
+    };
+    let wall_contact = match (raw.wall_contact, wall_faces) {
+        (false, _) => None,
+        (true, Some(faces)) => Some(faces),
+        (true, None) => {
+            return Err(format!(
+                "{p}.wall_contact = true keeps the beads behind the walls' faces, so it needs \
+                 walls: a [walls] table and fluid.grid = [nx, ny]; remove the key"
+            ))
+        }
     };
     let density = match raw.density {
         Some(x) => positive(&format!("{p}.density"), x)?,
@@ -722,8 +733,7 @@ fn validate_fibre(p: &str, raw: RawFibre, dims: u8) -> Result<FibreConfig, Strin
         spacing,
         initial_bend,
         self_contact: raw.self_contact,
-        // The faces, from the scene's walls, are filled in by `parse_scene`.
-        wall_contact: raw.wall_contact.then_some([f64::NAN; 2]),
+        wall_contact,
         centred: raw.centred,
         clamp,
         loads,
