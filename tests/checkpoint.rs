@@ -47,6 +47,7 @@ fn assert_same_end(a: &Path, b: &Path) {
     assert_eq!(sa["time"], sb["time"]);
     assert_eq!(sa["final_diagnostics"], sb["final_diagnostics"]);
     assert_eq!(sa["metrics"], sb["metrics"]);
+    assert_eq!(sa["largest_wall_overlap"], sb["largest_wall_overlap"]);
     let last = |d: &Path| {
         read_topic(&d.join("run.mcap"), "/fibre/bead_states")
             .unwrap()

@@ -230,6 +230,22 @@ fn wall_contact_keeps_a_bead_out_of_the_wall_slab() {
             .flat_map(|m| bead_xy(m).into_iter().map(|(_, y)| y))
             .fold(f64::INFINITY, f64::min);
         assert!(lowest.is_finite());
+        // The summary keeps the largest overlap of every step, not only of the logged ones,
+        // and warns past a hundredth of the radius without the contact, a tenth with it
+        // (coordinator/src/wall_watch.rs).
+        let largest = s["largest_wall_overlap"]["value"].as_f64().unwrap();
+        assert!(
+            largest >= deepest && largest < deepest + 0.05,
+            "{largest} vs {deepest}"
+        );
+        let warned = s["warnings"].as_array().unwrap();
+        assert_eq!(warned.len(), usize::from(!contact && largest > 0.04), "{s}");
+        if let Some(w) = warned.first() {
+            assert!(
+                w.as_str().unwrap().contains("fibre.0.wall_contact = true"),
+                "{w}"
+            );
+        }
         (deepest, 4.0 - (lowest - 3.5), contact_energy)
     };
     let (free, free_states, free_energy) = run(false);

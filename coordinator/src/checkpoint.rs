@@ -37,6 +37,10 @@ pub struct RunCheckpoint {
     /// when a piece did not record it (checkpoints written before this field existed).
     #[serde(default)]
     pub wall_seconds: Option<f64>,
+    /// The largest `wall_overlap` from step 0 to this checkpoint (absent in checkpoints
+    /// written before this field existed: then from the resume on).
+    #[serde(default)]
+    pub wall_watch: crate::wall_watch::WallWatch,
 }
 
 fn bits(s: &BeadState) -> [u64; 13] {
@@ -71,6 +75,7 @@ impl RunCheckpoint {
         initial: &[BeadState],
         trajectory: &Trajectory,
         wall_seconds: Option<f64>,
+        wall_watch: crate::wall_watch::WallWatch,
     ) -> Self {
         Self {
             format: FORMAT.into(),
@@ -80,6 +85,7 @@ impl RunCheckpoint {
             initial: initial.iter().map(bits).collect(),
             trajectory: trajectory.clone(),
             wall_seconds,
+            wall_watch,
         }
     }
 
@@ -192,7 +198,15 @@ mod tests {
     /// unknown (the resumed run's `wall_seconds_since_step_0` is then null).
     #[test]
     fn a_checkpoint_without_wall_seconds_reads_as_unknown() {
-        let c = RunCheckpoint::new(3, 1.5, "", &[], &Trajectory::default(), Some(12.5));
+        let c = RunCheckpoint::new(
+            3,
+            1.5,
+            "",
+            &[],
+            &Trajectory::default(),
+            Some(12.5),
+            Default::default(),
+        );
         let mut v = serde_json::to_value(&c).unwrap();
         assert_eq!(v["wall_seconds"], 12.5);
         v.as_object_mut().unwrap().remove("wall_seconds");
@@ -201,11 +215,36 @@ mod tests {
         assert_eq!((old.step, old.time), (3, 1.5));
     }
 
+    /// The largest wall overlap travels with the checkpoint (the resumed summary's
+    /// `largest_wall_overlap` is over both pieces); an older checkpoint reads as clear.
+    #[test]
+    fn the_largest_wall_overlap_is_kept_across_a_resume() {
+        let watch = crate::wall_watch::WallWatch {
+            largest: 0.7572,
+            step: 13_800,
+        };
+        let c = RunCheckpoint::new(3, 1.5, "", &[], &Trajectory::default(), None, watch);
+        let mut v = serde_json::to_value(&c).unwrap();
+        let back: RunCheckpoint = serde_json::from_value(v.clone()).unwrap();
+        assert_eq!(back.wall_watch, watch);
+        v.as_object_mut().unwrap().remove("wall_watch");
+        let old: RunCheckpoint = serde_json::from_value(v).unwrap();
+        assert_eq!(old.wall_watch, Default::default());
+    }
+
     #[test]
     fn a_resumed_scene_may_change_only_length_output_and_analysis() {
         let base =
             "[time]\ndt = 0.5\nsteps = 10\n[output]\ninterval = 5\n[fluid]\nviscosity = 1.0\n";
-        let c = RunCheckpoint::new(4, 2.0, base, &[], &Trajectory::default(), None);
+        let c = RunCheckpoint::new(
+            4,
+            2.0,
+            base,
+            &[],
+            &Trajectory::default(),
+            None,
+            Default::default(),
+        );
         let longer = base
             .replace("steps = 10", "steps = 40")
             .replace("interval = 5", "interval = 2");

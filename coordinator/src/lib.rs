@@ -20,3 +20,4 @@ pub mod schedule;
 pub mod shear_groups;
 pub mod study;
 pub mod trajectory;
+pub mod wall_watch;

@@ -275,6 +275,11 @@ fn print_result(summary: &serde_json::Value, out: &std::path::Path) {
             );
         }
     }
+    if let Some(w) = summary["warnings"].as_array() {
+        for w in w.iter().filter_map(|w| w.as_str()) {
+            println!("warning: {w}");
+        }
+    }
     let mut files = vec!["run.mcap".to_string(), "summary.json".to_string()];
     if let Some(extra) = summary["files"].as_array() {
         files.extend(extra.iter().filter_map(|f| f.as_str().map(String::from)));

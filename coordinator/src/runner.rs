@@ -301,6 +301,16 @@ fn radii(scene: &LoadedScene) -> Vec<f64> {
         .collect()
 }
 
+/// The summary's warning about beads inside a wall (`wall_watch.rs`), for scenes with walls.
+fn wall_warning(scene: &LoadedScene, watch: &crate::wall_watch::WallWatch) -> Option<String> {
+    scene.scene.walls.as_ref()?;
+    let radius = radii(scene).into_iter().fold(f64::INFINITY, f64::min);
+    let without_contact: Vec<usize> = (0..scene.scene.fibre.len())
+        .filter(|&n| scene.scene.fibre[n].get("wall_contact") != Some(&toml::Value::Boolean(true)))
+        .collect();
+    watch.warning(radius, &without_contact)
+}
+
 /// Largest applied load magnitude over all fibres (scale for the rest criterion).
 fn largest_load(scene: &LoadedScene) -> f64 {
     let mut m: f64 = 0.0;
@@ -407,6 +417,8 @@ struct RunState {
     /// Pipelined runs: the most steps sent to the nodes as one batch.
     largest_batch: u64,
     last_diagnostics: Vec<(String, f64)>,
+    /// The largest `wall_overlap` the fibre node reported, over every step.
+    wall_watch: crate::wall_watch::WallWatch,
     metrics: BTreeMap<String, crate::metrics::Metric>,
     /// Metrics asked for that could not be computed, with the reason.
     metric_errors: BTreeMap<String, String>,
@@ -483,6 +495,11 @@ impl RunState {
             "notes": self.configured.notes,
             "dimensionless": self.dimensionless,
             "final_diagnostics": diagnostics,
+            "largest_wall_overlap": scene.scene.walls.as_ref().filter(|_| !scene.scene.fibre.is_empty()).map(|_| json!({
+                "value": self.wall_watch.largest,
+                "step": self.wall_watch.step,
+            })),
+            "warnings": wall_warning(scene, &self.wall_watch).into_iter().collect::<Vec<_>>(),
             "metrics": self.metrics,
             "metric_errors": self.metric_errors,
             "files": self.files,
@@ -573,6 +590,7 @@ fn drive(
         st.wall_before = ck.wall_seconds;
         st.resumed_from = Some(ck.step);
         trajectory = ck.trajectory.clone();
+        st.wall_watch = ck.wall_watch;
     }
     if has_beads {
         exchange
@@ -713,6 +731,7 @@ fn drive(
                 st.configured.time_step_limits
             )));
         }
+        st.wall_watch.observe(step + 1, &report);
         st.last_diagnostics = report;
         let at_rest = scene
             .scene
@@ -763,6 +782,7 @@ fn drive(
                 &initial,
                 &trajectory,
                 st.wall_since_step_0(),
+                st.wall_watch,
             );
             save_checkpoint(&opts.out.join("checkpoint"), &run, nodes)?;
         }
