@@ -20,6 +20,13 @@
 //! - the start-up of each layout (the same run with one step, median of 7);
 //! - the overhead per step: each pair's run times less the start-ups, median over pairs.
 //!   This is what a long run pays; the benchmark's short runs pay the start-up on top.
+//! - the overhead per step that the fluid's phases do not explain: from each run's
+//!   summary.json, its wall time less the seconds inside the fluid node's phases (which a
+//!   change of the machine's speed between the two runs of a pair moves most), the two
+//!   layouts' difference less the start-ups, over the in-process step; median over pairs,
+//!   with a bootstrap 95 % interval of the median (5000 resamples, fixed seed).
+//!
+//! `COUPLED_RUN_PAIRS=N` takes N pairs instead of 7 (the interval narrows as 1 / sqrt N).
 //!
 //! `cargo bench --bench coupled_run` (builds the node executables first; about 5 minutes);
 //! a filter such as `-- builtin` times and pairs only the matching scenes. Figures in
@@ -99,6 +106,34 @@ const PAIRS: usize = 7;
 /// The cases criterion timed in this run of the bench.
 static TIMED: Mutex<Vec<&'static str>> = Mutex::new(Vec::new());
 
+/// One run's wall time, and its summary's wall seconds and seconds inside the fluid node's
+/// phases.
+struct Timed {
+    outside: Duration,
+    wall: f64,
+    fluid: f64,
+    steps: u64,
+}
+
+fn run_timed(case: &Case, in_process: bool, out: &Path, extra: &[&str]) -> Timed {
+    let outside = run_once(case, in_process, out, extra);
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("the run's summary");
+    let s: serde_json::Value = serde_json::from_str(&text).expect("summary.json is JSON");
+    let fluid = s["seconds_per_phase"]
+        .as_object()
+        .expect("seconds_per_phase")
+        .iter()
+        .filter(|(k, _)| k.starts_with("fluid-"))
+        .map(|(_, v)| v.as_f64().unwrap_or(0.0))
+        .sum();
+    Timed {
+        outside,
+        wall: s["wall_seconds"].as_f64().expect("wall_seconds"),
+        fluid,
+        steps: s["steps"].as_u64().expect("steps"),
+    }
+}
+
 fn run_once(case: &Case, in_process: bool, out: &Path, extra: &[&str]) -> Duration {
     let mut c = run_command(&root().join(case.scene), out);
     for o in case.overrides.iter().chain(extra) {
@@ -157,6 +192,23 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
+/// A bootstrap 95 % interval of the median of `v`: 5000 resamples with replacement, drawn
+/// by a fixed xorshift sequence so that the same figures give the same interval.
+fn median_interval(v: &[f64]) -> (f64, f64) {
+    let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x % v.len() as u64) as usize
+    };
+    let mut medians: Vec<f64> = (0..5000)
+        .map(|_| median((0..v.len()).map(|_| v[next()]).collect()))
+        .collect();
+    medians.sort_by(f64::total_cmp);
+    (medians[125], medians[4874])
+}
+
 /// Runs of the two layouts taken turn about, so that a change in the machine's load between
 /// criterion's blocks of samples does not show as overhead (see the module's doc); for the
 /// cases criterion timed (a filter on the command line leaves the others out).
@@ -165,18 +217,47 @@ fn paired_overheads(out: &Path) {
     if timed.is_empty() {
         return;
     }
-    println!("\ncoupled_run: {PAIRS} pairs of runs taken turn about, three processes over one");
+    let n_pairs = std::env::var("COUPLED_RUN_PAIRS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or(PAIRS);
+    println!("\ncoupled_run: {n_pairs} pairs of runs taken turn about, three processes over one");
     for case in CASES.iter().filter(|c| timed.contains(&c.name)) {
-        let run =
-            |in_process: bool, extra: &[&str]| run_once(case, in_process, out, extra).as_secs_f64();
-        let start_up: Vec<(f64, f64)> = (0..PAIRS)
+        let run = |in_process: bool, extra: &[&str]| run_timed(case, in_process, out, extra);
+        let start_up: Vec<(Timed, Timed)> = (0..n_pairs)
             .map(|_| (run(true, &["time.steps=1"]), run(false, &["time.steps=1"])))
             .collect();
-        let s_in = median(start_up.iter().map(|p| p.0).collect());
-        let s_ps = median(start_up.iter().map(|p| p.1).collect());
-        let pairs: Vec<(f64, f64)> = (0..PAIRS)
-            .map(|_| (run(true, &[]), run(false, &[])))
+        let s_in = median(start_up.iter().map(|p| p.0.outside.as_secs_f64()).collect());
+        let s_ps = median(start_up.iter().map(|p| p.1.outside.as_secs_f64()).collect());
+        // The same from the summaries' wall seconds, for the per-phase estimate.
+        let w_in = median(start_up.iter().map(|p| p.0.wall).collect());
+        let w_ps = median(start_up.iter().map(|p| p.1.wall).collect());
+        // Turn about: odd pairs run three processes first, so that a drift of the machine's
+        // speed within a pair does not always favour one layout.
+        let timed_pairs: Vec<(Timed, Timed)> = (0..n_pairs)
+            .map(|k| {
+                if k % 2 == 0 {
+                    (run(true, &[]), run(false, &[]))
+                } else {
+                    let ps = run(false, &[]);
+                    (run(true, &[]), ps)
+                }
+            })
             .collect();
+        let pairs: Vec<(f64, f64)> = timed_pairs
+            .iter()
+            .map(|(i, p)| (i.outside.as_secs_f64(), p.outside.as_secs_f64()))
+            .collect();
+        let steps = timed_pairs[0].0.steps;
+        let unexplained: Vec<f64> = timed_pairs
+            .iter()
+            .map(|(i, p)| {
+                let extra = (p.wall - p.fluid) - (i.wall - i.fluid) - (w_ps - w_in);
+                100.0 * extra / (i.wall - w_in)
+            })
+            .collect();
+        let (lo, hi) = median_interval(&unexplained);
         let mut whole: Vec<f64> = pairs.iter().map(|(i, p)| 100.0 * (p / i - 1.0)).collect();
         whole.sort_by(f64::total_cmp);
         let per_step = median(
@@ -196,6 +277,21 @@ fn paired_overheads(out: &Path) {
         );
         println!(
             "    start-up (one step): in-process {s_in:.3} s, processes {s_ps:.3} s; overhead per step without it: median {per_step:+.1} %"
+        );
+        let mut sorted = unexplained.clone();
+        sorted.sort_by(f64::total_cmp);
+        let per_step_us: Vec<f64> = timed_pairs
+            .iter()
+            .map(|(i, p)| {
+                1e6 * ((p.wall - p.fluid) - (i.wall - i.fluid) - (w_ps - w_in)) / steps as f64
+            })
+            .collect();
+        println!(
+            "    not in the fluid's phases ({steps} steps): {:.0} us a step more as processes (median), overhead per step median {:+.2} % (95 % interval of the median {lo:+.2} ... {hi:+.2} %; pairs {:+.1} ... {:+.1} %)",
+            median(per_step_us),
+            median(unexplained.clone()),
+            sorted[0],
+            sorted[sorted.len() - 1]
         );
     }
 }
