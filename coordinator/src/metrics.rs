@@ -89,6 +89,21 @@ fn stokes_2d_chain(ctx: &Context, beads: usize) -> Option<f64> {
         .then(|| stokes::chain_bretherton(beads))
 }
 
+/// Longest chain the 3D Stokes reference is solved for: a dense solve of 486 unknowns per
+/// bead (about 5 s at 6 beads on one core); longer chains fall back to Harris & Pittman.
+const MAX_STOKES_BEADS_3D: usize = 6;
+
+/// Bretherton constant of fibre 0 as a rigid chain of touching spheres in unbounded 3D
+/// Stokes flow ([`crate::reference::stokes_chain_3d::chain_bretherton`]), for a 3D scene
+/// whose fibre 0 is a straight chain of 2 to [`MAX_STOKES_BEADS_3D`] touching beads.
+fn stokes_3d_chain(ctx: &Context, beads: usize) -> Option<f64> {
+    let r = fibre0_bead_radius(ctx)?;
+    let length = lookup(ctx.derived, "fibre.0.length")?;
+    let touching = (length - 2.0 * r * (beads as f64 - 1.0)).abs() <= 1e-9 * length;
+    (ctx.scene.dimensions == 3 && (2..=MAX_STOKES_BEADS_3D).contains(&beads) && touching)
+        .then(|| crate::reference::stokes_chain_3d::chain_bretherton(beads))
+}
+
 /// `fibre.0.bead_radius` of the scene.
 pub(crate) fn fibre0_bead_radius(ctx: &Context) -> Option<f64> {
     number(ctx.scene.fibre.first().and_then(|f| f.get("bead_radius")))
@@ -340,8 +355,8 @@ pub fn compute(
                     .first()
                     .ok_or("the scene has no fibre")?;
                 let harris_pittman = crate::reference::jeffery::chain_period_gamma(n);
-                let mut m = match stokes_2d_chain(ctx, n) {
-                    Some(b) => {
+                let mut m = match (stokes_2d_chain(ctx, n), stokes_3d_chain(ctx, n)) {
+                    (Some(b), _) => {
                         let mut m = Metric::with_reference(
                             gamma * period,
                             stokes::period_gamma(b),
@@ -352,7 +367,18 @@ pub fn compute(
                         m.extra.insert("harris_pittman".into(), harris_pittman);
                         m
                     }
-                    None => Metric::with_reference(
+                    (None, Some(b)) => {
+                        let mut m = Metric::with_reference(
+                            gamma * period,
+                            crate::reference::stokes_chain_3d::period_gamma(b),
+                            "3D Stokes flow past the same rigid chain of touching spheres, \
+                             unbounded, tumbling in the shear plane (rigid multiblob \
+                             solution, coordinator/src/reference/stokes_chain_3d.rs)",
+                        );
+                        m.extra.insert("harris_pittman".into(), harris_pittman);
+                        m
+                    }
+                    (None, None) => Metric::with_reference(
                         gamma * period,
                         harris_pittman,
                         "Jeffery, gamma T = 2 pi (e + 1/e) with the equivalent ellipse e = 1.14 \
