@@ -469,6 +469,10 @@ impl RunState {
             .iter()
             .map(|(k, v)| (k.clone(), json!(v)))
             .collect();
+        // Scenes with walls and fibres: how far a bead reached into a wall (`wall_watch.rs`).
+        let largest_wall_overlap = (scene.scene.walls.is_some() && !scene.scene.fibre.is_empty())
+            .then(|| json!({ "value": self.wall_watch.largest, "step": self.wall_watch.step }));
+        let warnings: Vec<String> = wall_warning(scene, &self.wall_watch).into_iter().collect();
         json!({
             "scene": scene.name(),
             "scene_file": scene.path.as_ref().map(|p| p.display().to_string()),
@@ -495,11 +499,8 @@ impl RunState {
             "notes": self.configured.notes,
             "dimensionless": self.dimensionless,
             "final_diagnostics": diagnostics,
-            "largest_wall_overlap": scene.scene.walls.as_ref().filter(|_| !scene.scene.fibre.is_empty()).map(|_| json!({
-                "value": self.wall_watch.largest,
-                "step": self.wall_watch.step,
-            })),
-            "warnings": wall_warning(scene, &self.wall_watch).into_iter().collect::<Vec<_>>(),
+            "largest_wall_overlap": largest_wall_overlap,
+            "warnings": warnings,
             "metrics": self.metrics,
             "metric_errors": self.metric_errors,
             "files": self.files,
