@@ -82,11 +82,15 @@ const MAX_STOKES_BEADS: usize = 16;
 /// 2 to [`MAX_STOKES_BEADS`] touching beads; `None` otherwise (3D, beads spaced apart, or a
 /// longer chain).
 fn stokes_2d_chain(ctx: &Context, beads: usize) -> Option<f64> {
+    (ctx.scene.dimensions == 2 && (2..=MAX_STOKES_BEADS).contains(&beads) && touching(ctx, beads)?)
+        .then(|| stokes::chain_bretherton(beads))
+}
+
+/// Whether fibre 0, of `beads` beads, is a straight chain of touching beads.
+fn touching(ctx: &Context, beads: usize) -> Option<bool> {
     let r = fibre0_bead_radius(ctx)?;
     let length = lookup(ctx.derived, "fibre.0.length")?;
-    let touching = (length - 2.0 * r * (beads as f64 - 1.0)).abs() <= 1e-9 * length;
-    (ctx.scene.dimensions == 2 && (2..=MAX_STOKES_BEADS).contains(&beads) && touching)
-        .then(|| stokes::chain_bretherton(beads))
+    Some((length - 2.0 * r * (beads as f64 - 1.0)).abs() <= 1e-9 * length)
 }
 
 /// Longest chain the 3D Stokes reference is solved for: a dense solve of 486 unknowns per
@@ -97,11 +101,10 @@ const MAX_STOKES_BEADS_3D: usize = 6;
 /// Stokes flow ([`crate::reference::stokes_chain_3d::chain_bretherton`]), for a 3D scene
 /// whose fibre 0 is a straight chain of 2 to [`MAX_STOKES_BEADS_3D`] touching beads.
 fn stokes_3d_chain(ctx: &Context, beads: usize) -> Option<f64> {
-    let r = fibre0_bead_radius(ctx)?;
-    let length = lookup(ctx.derived, "fibre.0.length")?;
-    let touching = (length - 2.0 * r * (beads as f64 - 1.0)).abs() <= 1e-9 * length;
-    (ctx.scene.dimensions == 3 && (2..=MAX_STOKES_BEADS_3D).contains(&beads) && touching)
-        .then(|| crate::reference::stokes_chain_3d::chain_bretherton(beads))
+    (ctx.scene.dimensions == 3
+        && (2..=MAX_STOKES_BEADS_3D).contains(&beads)
+        && touching(ctx, beads)?)
+    .then(|| crate::reference::stokes_chain_3d::chain_bretherton(beads))
 }
 
 /// `fibre.0.bead_radius` of the scene.

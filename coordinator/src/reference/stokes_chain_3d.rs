@@ -267,7 +267,7 @@ pub fn chain_bretherton_at(n: usize, level: u32) -> f64 {
 /// How much the error of B falls from one shell level to the next (each has about four times
 /// the blobs of the one before): 2.8-3.7 for the spheroids of the tests, 3.0-3.1 for the
 /// chains (`stokes_chain_periods_3d`).
-const REFINEMENT_RATIO: f64 = 3.0;
+pub const REFINEMENT_RATIO: f64 = 3.0;
 
 /// Bretherton constant of a rigid chain of `beads` touching spheres: the shells of 42 and
 /// 162 blobs per sphere, extrapolated with [`REFINEMENT_RATIO`] (Richardson). On Jeffery's
@@ -277,15 +277,9 @@ pub fn chain_bretherton(beads: usize) -> f64 {
     fine - (coarse - fine) / (REFINEMENT_RATIO - 1.0)
 }
 
-/// gamma T of a full Jeffery period in the shear plane for Bretherton constant `b`.
-pub fn period_gamma(b: f64) -> f64 {
-    4.0 * PI / (1.0 - b * b).sqrt()
-}
-
-/// Aspect ratio of the equivalent spheroid, `B = (e² - 1) / (e² + 1)`.
-pub fn equivalent_aspect_ratio(b: f64) -> f64 {
-    ((1.0 + b) / (1.0 - b)).sqrt()
-}
+/// gamma T of a full Jeffery period (in the shear plane) and the equivalent spheroid's
+/// aspect ratio, from B: the same law as for the 2D ellipse.
+pub use super::stokes_chain_2d::{equivalent_aspect_ratio, period_gamma};
 
 #[cfg(test)]
 mod tests {
