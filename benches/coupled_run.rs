@@ -250,12 +250,15 @@ fn paired_overheads(out: &Path) {
             .map(|(i, p)| (i.outside.as_secs_f64(), p.outside.as_secs_f64()))
             .collect();
         let steps = timed_pairs[0].0.steps;
+        // Seconds per pair that three processes add outside the fluid's phases, start-ups off.
+        let extra: Vec<f64> = timed_pairs
+            .iter()
+            .map(|(i, p)| (p.wall - p.fluid) - (i.wall - i.fluid) - (w_ps - w_in))
+            .collect();
         let unexplained: Vec<f64> = timed_pairs
             .iter()
-            .map(|(i, p)| {
-                let extra = (p.wall - p.fluid) - (i.wall - i.fluid) - (w_ps - w_in);
-                100.0 * extra / (i.wall - w_in)
-            })
+            .zip(&extra)
+            .map(|((i, _), e)| 100.0 * e / (i.wall - w_in))
             .collect();
         let (lo, hi) = median_interval(&unexplained);
         let mut whole: Vec<f64> = pairs.iter().map(|(i, p)| 100.0 * (p / i - 1.0)).collect();
@@ -280,12 +283,7 @@ fn paired_overheads(out: &Path) {
         );
         let mut sorted = unexplained.clone();
         sorted.sort_by(f64::total_cmp);
-        let per_step_us: Vec<f64> = timed_pairs
-            .iter()
-            .map(|(i, p)| {
-                1e6 * ((p.wall - p.fluid) - (i.wall - i.fluid) - (w_ps - w_in)) / steps as f64
-            })
-            .collect();
+        let per_step_us: Vec<f64> = extra.iter().map(|e| 1e6 * e / steps as f64).collect();
         println!(
             "    not in the fluid's phases ({steps} steps): {:.0} us a step more as processes (median), overhead per step median {:+.2} % (95 % interval of the median {lo:+.2} ... {hi:+.2} %; pairs {:+.1} ... {:+.1} %)",
             median(per_step_us),

@@ -269,7 +269,7 @@ fn wall_contact_keeps_a_bead_out_of_the_wall_slab() {
 /// spm.md, "Jeffery orbit in 3D"). Tolerance 10 %, the for the Jeffery periods.
 #[test]
 fn jeffery_period_of_a_two_sphere_chain_against_3d_stokes() {
-    let o: Vec<String> = [
+    let o = [
         "fibre.0.beads=2",
         "fluid.grid=[48,64,32]",
         "walls.velocity=[-0.21875,0.21875]",
@@ -277,17 +277,22 @@ fn jeffery_period_of_a_two_sphere_chain_against_3d_stokes() {
         "fibre.0.start=[24.0,28.0,16.0]",
         "fibre.0.exchange=\"implicit\"",
         "time.steps=1900",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    let s = run_in_process(&config("spm/jeffery_rigid_3d.toml"), &o, "spm-jeffery-3d-2");
-    let (t, reference) = metric(&s, "tumbling_period_gamma");
+    ];
     let b = coordinator::reference::stokes_chain_3d::chain_bretherton(2);
     let stokes = coordinator::reference::stokes_chain_3d::period_gamma(b);
-    assert_eq!(reference, stokes);
+    let t = jeffery_period("spm/jeffery_rigid_3d.toml", &o, "spm-jeffery-3d-2", stokes);
     println!("3D, N_b = 2: gamma T = {t:.4}, 3D Stokes {stokes:.4}");
     assert!((t / stokes - 1.0).abs() < 0.10, "gamma T {t} vs {stokes}");
+}
+
+/// `tumbling_period_gamma` of `cfg` with the overrides `o`, in-process, after checking that
+/// its reference is `stokes`.
+fn jeffery_period(cfg: &str, o: &[&str], name: &str, stokes: f64) -> f64 {
+    let o: Vec<String> = o.iter().map(|s| s.to_string()).collect();
+    let s = run_in_process(&config(cfg), &o, name);
+    let (t, reference) = metric(&s, "tumbling_period_gamma");
+    assert_eq!(reference, stokes);
+    t
 }
 
 /// L2020 Fig. 7 at N_b = 3: `jeffery_rigid.toml` with the overrides of docs/validation/spm.md
@@ -297,21 +302,16 @@ fn jeffery_period_of_a_two_sphere_chain_against_3d_stokes() {
 /// tolerance 5 %, the size of the confinement and inertia effects over N_b = 3-9 (spm.md).
 #[test]
 fn jeffery_period_of_a_three_bead_chain_against_2d_stokes() {
-    let o: Vec<String> = [
+    let o = [
         "fibre.0.beads=3",
         "walls.velocity=[-0.07465278,0.07465278]",
         "fibre.0.youngs_modulus=6.90772569",
         "time.steps=19428",
         "fibre.0.start=[90.0,78.0,0.0]",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    let s = run_in_process(&config("spm/jeffery_rigid.toml"), &o, "spm-jeffery-3");
-    let (t, reference) = metric(&s, "tumbling_period_gamma");
+    ];
     let b = coordinator::reference::stokes_chain_2d::chain_bretherton(3);
     let stokes = coordinator::reference::stokes_chain_2d::period_gamma(b);
-    assert_eq!(reference, stokes);
+    let t = jeffery_period("spm/jeffery_rigid.toml", &o, "spm-jeffery-3", stokes);
     println!("N_b = 3: gamma T = {t:.4}, 2D Stokes {stokes:.4}");
     assert!((t / stokes - 1.0).abs() < 0.05, "gamma T {t} vs {stokes}");
 }

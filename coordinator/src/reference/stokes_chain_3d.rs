@@ -215,11 +215,17 @@ fn shell_hydrodynamic_radius(level: u32) -> f64 {
     fx / (6.0 * PI)
 }
 
+/// The shell `icosphere(level)` scaled so that its hydrodynamic radius is 1: its points, its
+/// blob radius, and the scale (below 1: a unit shell's drag is a larger sphere's).
+fn unit_shell(level: u32) -> (Vec<[f64; 3]>, f64, f64) {
+    let scale = 1.0 / shell_hydrodynamic_radius(level);
+    (icosphere(level), scale * blob_radius(level), scale)
+}
+
 /// Blobs of `n` touching spheres of hydrodynamic radius 1 along x, centred on the origin,
 /// each the shell `icosphere(level)`; and the blob radius.
 pub fn chain_blobs(n: usize, level: u32) -> (Vec<[f64; 3]>, f64) {
-    let scale = 1.0 / shell_hydrodynamic_radius(level);
-    let shell = icosphere(level);
+    let (shell, a, scale) = unit_shell(level);
     let mut out = Vec::with_capacity(n * shell.len());
     for i in 0..n {
         let cx = 2.0 * i as f64 - (n as f64 - 1.0);
@@ -227,7 +233,7 @@ pub fn chain_blobs(n: usize, level: u32) -> (Vec<[f64; 3]>, f64) {
             out.push([cx + scale * p[0], scale * p[1], scale * p[2]]);
         }
     }
-    (out, scale * blob_radius(level))
+    (out, a)
 }
 
 /// Blobs of a prolate spheroid of semi-axes `e` (along x) and 1, the check on the method:
@@ -235,10 +241,9 @@ pub fn chain_blobs(n: usize, level: u32) -> (Vec<[f64; 3]>, f64) {
 /// by the thickness a lone sphere's shell adds to its radius (its hydrodynamic radius less
 /// its geometric one, at the same blob radius); and the blob radius.
 pub fn spheroid_blobs(e: f64, level: u32) -> (Vec<[f64; 3]>, f64) {
-    let scale = 1.0 / shell_hydrodynamic_radius(level);
-    let a = scale * blob_radius(level);
+    let (shell, a, scale) = unit_shell(level);
     let set_back = 1.0 - scale;
-    let out = icosphere(level)
+    let out = shell
         .into_iter()
         .map(|p| {
             [
