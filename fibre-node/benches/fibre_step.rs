@@ -1,8 +1,11 @@
 //! Time of one full fibre step (fibre-positions + fibre-velocities, including the bead-state
 //! publications on an in-process exchange), 3D, for both models at 10, 100 and 1000 beads.
-//! Throughput is reported per bead.
+//! Throughput is reported per bead. Also the full check of the `self_overlap` diagnostic on a
+//! coil that overlaps itself (so that no check is skipped), 3D, 1000 and 100 000 beads.
 use cosim::{Component, InProcessExchange, Phase};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use fibre_node::quaternion::Vec3;
+use fibre_node::self_overlap::SelfOverlap;
 use fibre_node::FibreComponent;
 
 fn scene(model: &str, beads: usize, dt: f64) -> String {
@@ -44,5 +47,46 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench);
+/// A chain of touching unit beads on a random walk folded into a cube of about one bead
+/// volume in 8 of space, so that it crosses itself everywhere (xorshift, fixed seed).
+fn dense_coil(beads: usize) -> Vec<Vec3> {
+    let side = 2.0 * (beads as f64 * 8.0).cbrt();
+    let mut seed = 0x2545_F491_4F6C_DD1D_u64;
+    let mut uniform = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let mut pos = vec![Vec3::new(0.5 * side, 0.5 * side, 0.5 * side)];
+    let mut dir = Vec3::new(1.0, 0.0, 0.0);
+    for _ in 1..beads {
+        dir = (dir + Vec3::new(uniform(), uniform(), uniform())).normalize();
+        let mut next = pos[pos.len() - 1] + dir * 2.0;
+        for a in 0..3 {
+            if next[a] < 0.0 || next[a] > side {
+                dir[a] = -dir[a];
+                next[a] = pos[pos.len() - 1][a] + dir[a] * 2.0;
+            }
+        }
+        pos.push(next);
+    }
+    pos
+}
+
+fn bench_self_overlap(c: &mut Criterion) {
+    let mut group = c.benchmark_group("self_overlap_full_check_3d");
+    for beads in [1000usize, 100_000] {
+        let pos = dense_coil(beads);
+        let mut watch = SelfOverlap::new(beads, 1.0, 2.0, 3);
+        assert!(watch.measure(&pos) > 0.0, "the coil must overlap itself");
+        group.throughput(Throughput::Elements(beads as u64));
+        group.bench_with_input(BenchmarkId::from_parameter(beads), &beads, |b, _| {
+            b.iter(|| std::hint::black_box(watch.measure(&pos)))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench, bench_self_overlap);
 criterion_main!(benches);

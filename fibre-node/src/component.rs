@@ -2,6 +2,7 @@
 use crate::config::{parse_scene, Coupling, FibreGroup, ModelKind, SceneConfig, MAX_SUBSTEPS};
 use crate::fibre::{BeadKinematics, Fibre, Model};
 use crate::quaternion::{from_array, to_array, Vec3};
+use crate::self_overlap::SelfOverlap;
 use crate::spm_exchange;
 use crate::stability::{fpd_margin, fpd_stiffness_limit, stability_limit, SAFETY};
 use crate::wall_contact::overlaps;
@@ -14,7 +15,7 @@ use cosim::{
 use serde::{Deserialize, Serialize};
 
 /// Names of the diagnostics of every [`PhaseReport`], in their fixed order.
-pub const DIAGNOSTICS: [&str; 9] = [
+pub const DIAGNOSTICS: [&str; 10] = [
     "kinetic_energy",
     "stretch_energy",
     "bend_energy",
@@ -24,6 +25,7 @@ pub const DIAGNOSTICS: [&str; 9] = [
     "max_speed",
     "max_net_force",
     "wall_overlap",
+    "self_overlap",
 ];
 
 /// Tag of the saved-state format.
@@ -51,6 +53,10 @@ pub struct FibreComponent {
 struct Run {
     scene: SceneConfig,
     fibres: Vec<Fibre>,
+    /// Per fibre, the watch over its beads reaching into each other (`self_overlap`).
+    self_overlaps: Vec<SelfOverlap>,
+    /// The `self_overlap` last measured, at the end of the last step.
+    self_overlap: f64,
     total_beads: usize,
     /// How the fluid, if any, moves the fibres: SPM impulses are read in
     /// `FibreVelocities`; FPD runs `FibreForces` and `FibreAdvance` instead.
@@ -146,7 +152,12 @@ fn fill_states(fibres: &[Fibre], out: &mut Vec<BeadState>) {
 }
 
 impl Run {
-    fn report(&self) -> PhaseReport {
+    /// The phase's diagnostics. `step_ends`: the phase leaves the step's positions
+    /// (fibre-velocities, fibre-advance), which `self_overlap` is measured at; the other
+    /// phases report the value of the step before (fibre-positions' predicted positions
+    /// are provisional, fibre-forces moves nothing), since the coordinator keeps the last
+    /// phase's value of a step.
+    fn report(&mut self, step_ends: bool) -> PhaseReport {
         let mut ke = 0.0;
         let mut e = crate::energies::Energies::default();
         let mut vmax: f64 = 0.0;
@@ -167,6 +178,13 @@ impl Run {
                 }
             }
         }
+        // How deep two beads of one fibre reach into each other (`crate::self_overlap`).
+        if step_ends {
+            self.self_overlap = 0.0;
+            for (f, w) in self.fibres.iter().zip(&mut self.self_overlaps) {
+                self.self_overlap = self.self_overlap.max(w.measure(&f.pos));
+            }
+        }
         let values = [
             ke,
             e.stretch,
@@ -177,6 +195,7 @@ impl Run {
             vmax,
             fmax,
             overlap,
+            self.self_overlap,
         ];
         PhaseReport {
             diagnostics: DIAGNOSTICS
@@ -245,7 +264,7 @@ impl Component for FibreComponent {
                 param("fibre.N.centred", "1", Some("false"), "true: start such that the fibre's midpoint lies at the centre of the gap between the walls, y = (ny - 1) / 2, x = nx / 2 (z = nz / 2), as S2023 place it; excludes start"),
                 param("fibre.N.direction", "1", Some("[1.0, 0.0, 0.0]"), "direction of the straight initial fibre (normalised; z = 0 in 2D)"),
                 param("fibre.N.spacing", len, Some("2 bead_radius"), "initial and rest distance between neighbouring beads"),
-                param("fibre.N.self_contact", "1", Some("false"), "true: beads that are not neighbours along the chain repel while their spheres overlap, with the fibre's axial bond stiffness (excluded volume; neither paper has it, so off by default)"),
+                param("fibre.N.self_contact", "1", Some("false"), "true: beads that are not neighbours along the chain repel while their spheres overlap, with the fibre's axial bond stiffness (excluded volume; neither paper has it, so off by default; without it a soft fibre that folds or coils can pass through itself: watch the self_overlap diagnostic)"),
                 param("fibre.N.wall_contact", "1", Some("false"), "true (scenes with walls): a bead whose sphere reaches past a wall's face is pushed back along the wall's normal, with the fibre's axial bond stiffness (frictionless; neither paper has it, so off by default; without it an SPM bead can sink into a wall slab: watch the wall_overlap diagnostic)"),
                 param("fibre.N.initial_bend", len, Some("0.0"), "amplitude of an S-shaped initial offset across direction (one sine wave along the fibre): seeds buckling; the fibre is at rest but not stress-free"),
                 param("fibre.N.clamp", "1", Some("[]"), "indices of clamped beads (negative counts from the end): fixed position and orientation; under fpd-lbm held in place by a proportional-integral force (its steady value is minus the drag)"),
@@ -537,11 +556,21 @@ impl Component for FibreComponent {
         }
 
         let total_beads = fibres.iter().map(|f| f.len()).sum();
+        let self_overlaps = fibres
+            .iter()
+            .zip(&scene.fibres)
+            .map(|(f, cfg)| {
+                let dims = if f.planar { 2 } else { 3 };
+                SelfOverlap::new(f.len(), cfg.bead_radius, cfg.spacing, dims)
+            })
+            .collect();
         let mut run = Run {
             coupling: scene.coupling,
             use_impulses: scene.coupling == Coupling::Spm,
             scene,
             fibres,
+            self_overlaps,
+            self_overlap: 0.0,
             total_beads,
             forces_current: true,
             pending: None,
@@ -589,7 +618,7 @@ impl Component for FibreComponent {
                         .extend(f.force.iter().map(|v| BeadForce { force: (*v).into() }));
                 }
                 exchange.publish_forces(Port::BeadForces, step, &run.forces)?;
-                return Ok(run.report());
+                return Ok(run.report(false));
             }
             Phase::FibreAdvance => {
                 let header = exchange.read_states(Port::BeadVelocities, &mut run.velocities)?;
@@ -677,7 +706,7 @@ impl Component for FibreComponent {
             Port::BeadStates
         };
         run.publish(step + 1, port, exchange)?;
-        Ok(run.report())
+        Ok(run.report(phase != Phase::FibrePositions))
     }
 
     fn save_state(&self) -> Result<Vec<u8>, ComponentError> {

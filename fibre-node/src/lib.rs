@@ -5,6 +5,8 @@
 //! - [`fibre`]: one fibre's state, bead mass and inertia, the split symplectic integrator;
 //! - [`self_contact`]: optional excluded volume between non-neighbouring beads;
 //! - [`wall_contact`]: optional contact of the beads with the walls' faces;
+//! - [`self_overlap`]: the `self_overlap` diagnostic, how deep a fibre's beads reach into
+//!   each other (cell list, checked only when the beads may have met);
 //! - [`stability`]: the beam-stiffness time-step limit;
 //! - [`config`]: the `[[fibre]]` part of a scene;
 //! - [`component`]: [`FibreComponent`], the [`cosim::Component`] the executable serves;
@@ -19,6 +21,7 @@ pub mod fibre;
 mod gradient_check;
 pub mod quaternion;
 pub mod self_contact;
+pub mod self_overlap;
 pub mod spm_exchange;
 pub mod stability;
 pub mod wall_contact;
