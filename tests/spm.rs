@@ -187,6 +187,75 @@ fn stiff_fibre_with_the_implicit_exchange_stays_bounded_without_damping() {
     stiff_fibre_run(0.0, "implicit");
 }
 
+/// The K = 0.01 coil of S2023's Fig. 7 scene at C = 0.87 under SPM
+/// (`configs/spm/s2023_fig7_chord.toml`, r_b = 4), 12 000 steps: the fibre buckles and folds,
+/// and nothing keeps its beads apart, so two of them pass into each other (measured: the
+/// `self_overlap` diagnostic 0.85 grid spacings by step 12 000, 7.6 of the diameter 8 over
+/// the whole run). With `fibre.0.self_contact = true` they stay apart (0.016 at most over
+/// the whole run). S2023 report that their FPD beads never overlapped; ours under FPD do not
+/// either (docs/validation/spm.md, "Beads passing through each other"). Reference: the
+/// beads' spheres, from the logged bead states. Tolerances: without contact the overlap must
+/// pass a tenth of the radius, with it stay below a hundredth; the summary's largest value
+/// (every step) is at least the largest in the log (every 500 steps).
+#[test]
+fn self_overlap_is_reported_and_kept_down_by_self_contact() {
+    let run = |contact: bool| {
+        let o = overrides(
+            &[
+                "fibre.0.bending_number=0.01",
+                "fluid.confinement=0.87",
+                "time.steps=12000",
+                "output.interval=500",
+                "analysis.metrics=[]",
+            ],
+            &[format!("fibre.0.self_contact={contact}")],
+        );
+        let name = format!("spm-self-overlap-{contact}");
+        let s = run_in_process(&config("spm/s2023_fig7_chord.toml"), &o, &name);
+        assert_eq!(s["status"], "completed", "{s}");
+        let log = run_dir(&name).join("run.mcap");
+        // The deepest overlap of beads i, j >= i + 2 in the logged states (r_b = 4).
+        let mut from_states: f64 = 0.0;
+        for m in read_topic(&log, "/fibre/bead_states").unwrap() {
+            let b = bead_xy(&m);
+            for i in 0..b.len() {
+                for j in i + 2..b.len() {
+                    let d = (b[i].0 - b[j].0).hypot(b[i].1 - b[j].1);
+                    from_states = from_states.max(8.0 - d);
+                }
+            }
+        }
+        let logged = read_topic(&log, "/diagnostics")
+            .unwrap()
+            .iter()
+            .map(|v| v["self_overlap"].as_f64().unwrap())
+            .fold(0.0, f64::max);
+        assert!(
+            (logged - from_states.max(0.0)).abs() < 1e-9,
+            "{logged} vs {from_states}"
+        );
+        let largest = s["largest_self_overlap"]["value"].as_f64().unwrap();
+        assert!(largest >= logged, "{largest} vs {logged}");
+        let warned = s["warnings"].as_array().unwrap();
+        assert_eq!(warned.len(), usize::from(!contact && largest > 0.04), "{s}");
+        if let Some(w) = warned.first() {
+            assert!(
+                w.as_str().unwrap().contains("fibre.0.self_contact = true"),
+                "{w}"
+            );
+        }
+        largest
+    };
+    let free = run(false);
+    let held = run(true);
+    println!("largest self overlap: free {free:.4}, with self contact {held:.5}");
+    assert!(
+        free > 0.4,
+        "without contact the beads overlapped only {free}"
+    );
+    assert!(held < 0.04, "with contact the beads overlapped {held}");
+}
+
 /// A fibre lying along the bottom wall of the built-in example (`configs/spm/tumbling.toml`,
 /// 96^2, slabs of 4: face at y = 3.5), bead 0 touching it (y = 7.5 + 0.5), 14 000 steps.
 /// Nothing in SPM keeps a bead out of a wall slab: the fibre tilts and its leading end sinks
@@ -232,7 +301,7 @@ fn wall_contact_keeps_a_bead_out_of_the_wall_slab() {
         assert!(lowest.is_finite());
         // The summary keeps the largest overlap of every step, not only of the logged ones,
         // and warns past a hundredth of the radius without the contact, a tenth with it
-        // (coordinator/src/wall_watch.rs).
+        // (coordinator/src/overlap_watch.rs).
         let largest = s["largest_wall_overlap"]["value"].as_f64().unwrap();
         assert!(
             largest >= deepest && largest < deepest + 0.05,

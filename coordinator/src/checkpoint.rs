@@ -37,10 +37,10 @@ pub struct RunCheckpoint {
     /// when a piece did not record it (checkpoints written before this field existed).
     #[serde(default)]
     pub wall_seconds: Option<f64>,
-    /// The largest `wall_overlap` from step 0 to this checkpoint (absent in checkpoints
-    /// written before this field existed: then from the resume on).
-    #[serde(default)]
-    pub wall_watch: crate::wall_watch::WallWatch,
+    /// The largest `wall_overlap` and `self_overlap` from step 0 to this checkpoint (fields
+    /// `wall_watch` and `self_watch`).
+    #[serde(flatten)]
+    pub watches: crate::overlap_watch::OverlapWatches,
 }
 
 fn bits(s: &BeadState) -> [u64; 13] {
@@ -75,7 +75,7 @@ impl RunCheckpoint {
         initial: &[BeadState],
         trajectory: &Trajectory,
         wall_seconds: Option<f64>,
-        wall_watch: crate::wall_watch::WallWatch,
+        watches: crate::overlap_watch::OverlapWatches,
     ) -> Self {
         Self {
             format: FORMAT.into(),
@@ -85,7 +85,7 @@ impl RunCheckpoint {
             initial: initial.iter().map(bits).collect(),
             trajectory: trajectory.clone(),
             wall_seconds,
-            wall_watch,
+            watches,
         }
     }
 
@@ -215,21 +215,35 @@ mod tests {
         assert_eq!((old.step, old.time), (3, 1.5));
     }
 
-    /// The largest wall overlap travels with the checkpoint (the resumed summary's
-    /// `largest_wall_overlap` is over both pieces); an older checkpoint reads as clear.
+    /// The largest overlaps travel with the checkpoint (the resumed summary's
+    /// `largest_wall_overlap` and `largest_self_overlap` are over both pieces); an older
+    /// checkpoint without them reads as clear.
     #[test]
-    fn the_largest_wall_overlap_is_kept_across_a_resume() {
-        let watch = crate::wall_watch::WallWatch {
-            largest: 0.7572,
-            step: 13_800,
+    fn the_largest_overlaps_are_kept_across_a_resume() {
+        use crate::overlap_watch::{OverlapWatch, OverlapWatches};
+        let watches = OverlapWatches {
+            wall_watch: OverlapWatch {
+                largest: 0.7572,
+                step: 13_800,
+            },
+            self_watch: OverlapWatch {
+                largest: 1.25,
+                step: 900,
+            },
         };
-        let c = RunCheckpoint::new(3, 1.5, "", &[], &Trajectory::default(), None, watch);
+        let c = RunCheckpoint::new(3, 1.5, "", &[], &Trajectory::default(), None, watches);
         let mut v = serde_json::to_value(&c).unwrap();
+        assert_eq!(v["wall_watch"]["largest"], 0.7572);
+        assert_eq!(v["self_watch"]["step"], 900);
         let back: RunCheckpoint = serde_json::from_value(v.clone()).unwrap();
-        assert_eq!(back.wall_watch, watch);
+        assert_eq!(back.watches, watches);
+        v.as_object_mut().unwrap().remove("self_watch");
+        let older: RunCheckpoint = serde_json::from_value(v.clone()).unwrap();
+        assert_eq!(older.watches.wall_watch, watches.wall_watch);
+        assert_eq!(older.watches.self_watch, Default::default());
         v.as_object_mut().unwrap().remove("wall_watch");
-        let old: RunCheckpoint = serde_json::from_value(v).unwrap();
-        assert_eq!(old.wall_watch, Default::default());
+        let oldest: RunCheckpoint = serde_json::from_value(v).unwrap();
+        assert_eq!(oldest.watches, Default::default());
     }
 
     #[test]

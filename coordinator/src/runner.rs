@@ -2,6 +2,7 @@
 //! everything, and write the summary — also when a node fails or the user presses Ctrl-C.
 use crate::links::{self, LinkFailure, NodeLink};
 use crate::mcap_log::RunLog;
+use crate::overlap_watch::{Overlap, OverlapWatch, OverlapWatches};
 use crate::pipeline;
 use crate::scene::LoadedScene;
 use crate::schedule::{self, Plan};
@@ -301,14 +302,27 @@ fn radii(scene: &LoadedScene) -> Vec<f64> {
         .collect()
 }
 
-/// The summary's warning about beads inside a wall (`wall_watch.rs`), for scenes with walls.
-fn wall_warning(scene: &LoadedScene, watch: &crate::wall_watch::WallWatch) -> Option<String> {
-    scene.scene.walls.as_ref()?;
+/// The summary's warnings about beads inside a wall (scenes with walls) and inside each
+/// other (`overlap_watch.rs`).
+fn overlap_warnings(scene: &LoadedScene, watches: &OverlapWatches) -> Vec<String> {
     let radius = radii(scene).into_iter().fold(f64::INFINITY, f64::min);
-    let without_contact: Vec<usize> = (0..scene.scene.fibre.len())
-        .filter(|&n| scene.scene.fibre[n].get("wall_contact") != Some(&toml::Value::Boolean(true)))
-        .collect();
-    watch.warning(radius, &without_contact)
+    let without = |what: Overlap| -> Vec<usize> {
+        let on = Some(toml::Value::Boolean(true));
+        (0..scene.scene.fibre.len())
+            .filter(|&n| scene.scene.fibre[n].get(what.contact_key()) != on.as_ref())
+            .collect()
+    };
+    let mut out = Vec::new();
+    if scene.scene.walls.is_some() {
+        out.extend(
+            watches
+                .wall_watch
+                .warning(Overlap::Wall, radius, &without(Overlap::Wall)),
+        );
+    }
+    let what = Overlap::SelfOverlap;
+    out.extend(watches.self_watch.warning(what, radius, &without(what)));
+    out
 }
 
 /// Largest applied load magnitude over all fibres (scale for the rest criterion).
@@ -417,8 +431,8 @@ struct RunState {
     /// Pipelined runs: the most steps sent to the nodes as one batch.
     largest_batch: u64,
     last_diagnostics: Vec<(String, f64)>,
-    /// The largest `wall_overlap` the fibre node reported, over every step.
-    wall_watch: crate::wall_watch::WallWatch,
+    /// The largest `wall_overlap` and `self_overlap` the fibre node reported, over every step.
+    watches: OverlapWatches,
     metrics: BTreeMap<String, crate::metrics::Metric>,
     /// Metrics asked for that could not be computed, with the reason.
     metric_errors: BTreeMap<String, String>,
@@ -469,10 +483,14 @@ impl RunState {
             .iter()
             .map(|(k, v)| (k.clone(), json!(v)))
             .collect();
-        // Scenes with walls and fibres: how far a bead reached into a wall (`wall_watch.rs`).
-        let largest_wall_overlap = (scene.scene.walls.is_some() && !scene.scene.fibre.is_empty())
-            .then(|| json!({ "value": self.wall_watch.largest, "step": self.wall_watch.step }));
-        let warnings: Vec<String> = wall_warning(scene, &self.wall_watch).into_iter().collect();
+        // How far a bead reached into a wall (scenes with walls and fibres) and into another
+        // bead of its fibre (scenes with fibres; `overlap_watch.rs`).
+        let has_fibres = !scene.scene.fibre.is_empty();
+        let largest = |w: &OverlapWatch| json!({ "value": w.largest, "step": w.step });
+        let largest_wall_overlap =
+            (scene.scene.walls.is_some() && has_fibres).then(|| largest(&self.watches.wall_watch));
+        let largest_self_overlap = has_fibres.then(|| largest(&self.watches.self_watch));
+        let warnings = overlap_warnings(scene, &self.watches);
         json!({
             "scene": scene.name(),
             "scene_file": scene.path.as_ref().map(|p| p.display().to_string()),
@@ -500,6 +518,7 @@ impl RunState {
             "dimensionless": self.dimensionless,
             "final_diagnostics": diagnostics,
             "largest_wall_overlap": largest_wall_overlap,
+            "largest_self_overlap": largest_self_overlap,
             "warnings": warnings,
             "metrics": self.metrics,
             "metric_errors": self.metric_errors,
@@ -591,7 +610,7 @@ fn drive(
         st.wall_before = ck.wall_seconds;
         st.resumed_from = Some(ck.step);
         trajectory = ck.trajectory.clone();
-        st.wall_watch = ck.wall_watch;
+        st.watches = ck.watches;
     }
     if has_beads {
         exchange
@@ -732,7 +751,7 @@ fn drive(
                 st.configured.time_step_limits
             )));
         }
-        st.wall_watch.observe(step + 1, &report);
+        st.watches.observe(step + 1, &report);
         st.last_diagnostics = report;
         let at_rest = scene
             .scene
@@ -783,7 +802,7 @@ fn drive(
                 &initial,
                 &trajectory,
                 st.wall_since_step_0(),
-                st.wall_watch,
+                st.watches,
             );
             save_checkpoint(&opts.out.join("checkpoint"), &run, nodes)?;
         }
