@@ -48,6 +48,7 @@ fn assert_same_end(a: &Path, b: &Path) {
     assert_eq!(sa["final_diagnostics"], sb["final_diagnostics"]);
     assert_eq!(sa["metrics"], sb["metrics"]);
     assert_eq!(sa["largest_wall_overlap"], sb["largest_wall_overlap"]);
+    assert_eq!(sa["largest_self_overlap"], sb["largest_self_overlap"]);
     let last = |d: &Path| {
         read_topic(&d.join("run.mcap"), "/fibre/bead_states")
             .unwrap()
