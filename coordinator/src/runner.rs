@@ -307,9 +307,9 @@ fn radii(scene: &LoadedScene) -> Vec<f64> {
 fn overlap_warnings(scene: &LoadedScene, watches: &OverlapWatches) -> Vec<String> {
     let radius = radii(scene).into_iter().fold(f64::INFINITY, f64::min);
     let without = |what: Overlap| -> Vec<usize> {
-        let on = Some(toml::Value::Boolean(true));
+        let on = toml::Value::Boolean(true);
         (0..scene.scene.fibre.len())
-            .filter(|&n| scene.scene.fibre[n].get(what.contact_key()) != on.as_ref())
+            .filter(|&n| scene.scene.fibre[n].get(what.contact_key()) != Some(&on))
             .collect()
     };
     let mut out = Vec::new();
