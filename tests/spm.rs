@@ -187,6 +187,23 @@ fn stiff_fibre_with_the_implicit_exchange_stays_bounded_without_damping() {
     stiff_fibre_run(0.0, "implicit");
 }
 
+/// The summary of a run of bead radius 4 warns once, naming `fibre.0.{key} = true`, exactly
+/// when the contact was off and the largest overlap passed a hundredth of the radius
+/// (coordinator/src/overlap_watch.rs).
+fn assert_one_warning_without_contact(
+    s: &serde_json::Value,
+    contact: bool,
+    largest: f64,
+    key: &str,
+) {
+    let warned = s["warnings"].as_array().unwrap();
+    assert_eq!(warned.len(), usize::from(!contact && largest > 0.04), "{s}");
+    if let Some(w) = warned.first() {
+        let text = format!("fibre.0.{key} = true");
+        assert!(w.as_str().unwrap().contains(&text), "{w}");
+    }
+}
+
 /// The K = 0.01 coil of S2023's Fig. 7 scene at C = 0.87 under SPM
 /// (`configs/spm/s2023_fig7_chord.toml`, r_b = 4), 12 000 steps: the fibre buckles and folds,
 /// and nothing keeps its beads apart, so two of them pass into each other (measured: the
@@ -236,14 +253,7 @@ fn self_overlap_is_reported_and_kept_down_by_self_contact() {
         );
         let largest = s["largest_self_overlap"]["value"].as_f64().unwrap();
         assert!(largest >= logged, "{largest} vs {logged}");
-        let warned = s["warnings"].as_array().unwrap();
-        assert_eq!(warned.len(), usize::from(!contact && largest > 0.04), "{s}");
-        if let Some(w) = warned.first() {
-            assert!(
-                w.as_str().unwrap().contains("fibre.0.self_contact = true"),
-                "{w}"
-            );
-        }
+        assert_one_warning_without_contact(&s, contact, largest, "self_contact");
         largest
     };
     let free = run(false);
@@ -307,14 +317,7 @@ fn wall_contact_keeps_a_bead_out_of_the_wall_slab() {
             largest >= deepest && largest < deepest + 0.05,
             "{largest} vs {deepest}"
         );
-        let warned = s["warnings"].as_array().unwrap();
-        assert_eq!(warned.len(), usize::from(!contact && largest > 0.04), "{s}");
-        if let Some(w) = warned.first() {
-            assert!(
-                w.as_str().unwrap().contains("fibre.0.wall_contact = true"),
-                "{w}"
-            );
-        }
+        assert_one_warning_without_contact(&s, contact, largest, "wall_contact");
         (deepest, 4.0 - (lowest - 3.5), contact_energy)
     };
     let (free, free_states, free_energy) = run(false);
