@@ -266,6 +266,74 @@ fn self_overlap_is_reported_and_kept_down_by_self_contact() {
     assert!(held < 0.04, "with contact the beads overlapped {held}");
 }
 
+/// A loaded fibre pressed onto a held one (`configs/spm/fibres_resting.toml`: 2D SPM, fluid
+/// at rest, 3-bead cohesive beams of radius 3, a load F = 0.005 on each bead of the upper
+/// one), 8000 steps. With `fibre.N.fibre_contact` on both it comes to rest on the held fibre,
+/// each bead on the one below, and the contact spring k_c = pi E r_b / 2 (the axial bond
+/// stiffness, L2020 eq. 11) is compressed by F / k_c = 0.10610 (measured 0.106115 at step
+/// 8000, 0.1061033 at 30 000). Reference: the static balance F = k_c delta; tolerance 1e-3
+/// relative (what is left of the settling). The logged bead states give the same overlap,
+/// and the three-process run the same bits. Without the contact the upper fibre falls
+/// through the held one at about 4e-4 grid spacings a step (2.4 deep by step 8000; measured
+/// to pass clean through by step 17 000), and the summary warns.
+#[test]
+fn a_fibre_rests_on_another_through_the_contact_between_fibres() {
+    let cfg = config("spm/fibres_resting.toml");
+    let common = ["time.steps=8000", "output.interval=1000"];
+    let on = run_in_process(&cfg, &overrides(&common, &[]), "spm-fibres-resting");
+    assert_eq!(on["status"], "completed", "{on}");
+    let settled = on["final_diagnostics"]["fibre_overlap"].as_f64().unwrap();
+    let want = 0.005 / (std::f64::consts::PI * 0.01 * 3.0 / 2.0);
+    println!("fibre overlap at rest: {settled:.6} (F / k_c = {want:.6})");
+    assert!((settled / want - 1.0).abs() < 1e-3, "{settled} vs {want}");
+    assert_one_warning_without_contact(&on, true, settled, "fibre_contact");
+    // The last logged states: fibre 0 is beads 0-2, fibre 1 beads 3-5.
+    let log = run_dir("spm-fibres-resting").join("run.mcap");
+    let states = read_topic(&log, "/fibre/bead_states").unwrap();
+    let b = bead_xy(states.last().unwrap());
+    let mut from_states = f64::NEG_INFINITY;
+    for p in &b[..3] {
+        for q in &b[3..] {
+            from_states = from_states.max(6.0 - (p.0 - q.0).hypot(p.1 - q.1));
+        }
+    }
+    assert!(
+        (from_states - settled).abs() < 1e-9,
+        "{from_states} vs {settled}"
+    );
+    // Three processes: the same bits.
+    let dir = run_scene(
+        "spm-fibres-resting-processes",
+        &cfg,
+        &overrides(&common, &[]),
+        &[],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let processes = summary(&dir);
+    assert_eq!(
+        processes["final_diagnostics"], on["final_diagnostics"],
+        "three processes against one"
+    );
+    assert_eq!(
+        processes["largest_fibre_overlap"],
+        on["largest_fibre_overlap"]
+    );
+    // Without the contact.
+    let off = [
+        "fibre.0.fibre_contact=false".to_string(),
+        "fibre.1.fibre_contact=false".to_string(),
+    ];
+    let s = run_in_process(&cfg, &overrides(&common, &off), "spm-fibres-through");
+    let through = s["largest_fibre_overlap"]["value"].as_f64().unwrap();
+    assert!(
+        through > 2.0,
+        "without contact the fibres overlapped only {through}"
+    );
+    assert_one_warning_without_contact(&s, false, through, "fibre_contact");
+    let w = s["warnings"][0].as_str().unwrap();
+    assert!(w.contains("fibre.1.fibre_contact = true"), "{w}");
+}
+
 /// A fibre lying along the bottom wall of the built-in example (`configs/spm/tumbling.toml`,
 /// 96^2, slabs of 4: face at y = 3.5), bead 0 touching it (y = 7.5 + 0.5), 14 000 steps.
 /// Nothing in SPM keeps a bead out of a wall slab: the fibre tilts and its leading end sinks

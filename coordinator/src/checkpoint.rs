@@ -37,8 +37,8 @@ pub struct RunCheckpoint {
     /// when a piece did not record it (checkpoints written before this field existed).
     #[serde(default)]
     pub wall_seconds: Option<f64>,
-    /// The largest `wall_overlap` and `self_overlap` from step 0 to this checkpoint (fields
-    /// `wall_watch` and `self_watch`).
+    /// The largest `wall_overlap`, `self_overlap` and `fibre_overlap` from step 0 to this
+    /// checkpoint (fields `wall_watch`, `self_watch` and `fibre_watch`).
     #[serde(flatten)]
     pub watches: crate::overlap_watch::OverlapWatches,
 }
@@ -216,7 +216,8 @@ mod tests {
     }
 
     /// The largest overlaps travel with the checkpoint (the resumed summary's
-    /// `largest_wall_overlap` and `largest_self_overlap` are over both pieces); an older
+    /// `largest_wall_overlap`, `largest_self_overlap` and `largest_fibre_overlap` are over
+    /// both pieces); an older
     /// checkpoint without them reads as clear.
     #[test]
     fn the_largest_overlaps_are_kept_across_a_resume() {
@@ -230,17 +231,24 @@ mod tests {
                 largest: 1.25,
                 step: 900,
             },
+            fibre_watch: OverlapWatch {
+                largest: 0.5,
+                step: 42,
+            },
         };
         let c = RunCheckpoint::new(3, 1.5, "", &[], &Trajectory::default(), None, watches);
         let mut v = serde_json::to_value(&c).unwrap();
         assert_eq!(v["wall_watch"]["largest"], 0.7572);
         assert_eq!(v["self_watch"]["step"], 900);
+        assert_eq!(v["fibre_watch"]["step"], 42);
         let back: RunCheckpoint = serde_json::from_value(v.clone()).unwrap();
         assert_eq!(back.watches, watches);
+        v.as_object_mut().unwrap().remove("fibre_watch");
         v.as_object_mut().unwrap().remove("self_watch");
         let older: RunCheckpoint = serde_json::from_value(v.clone()).unwrap();
         assert_eq!(older.watches.wall_watch, watches.wall_watch);
         assert_eq!(older.watches.self_watch, Default::default());
+        assert_eq!(older.watches.fibre_watch, Default::default());
         v.as_object_mut().unwrap().remove("wall_watch");
         let oldest: RunCheckpoint = serde_json::from_value(v).unwrap();
         assert_eq!(oldest.watches, Default::default());

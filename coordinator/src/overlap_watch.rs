@@ -1,20 +1,21 @@
-//! Watching for beads where no bead should be: inside a wall, or inside another bead of its
-//! own fibre.
+//! Watching for beads where no bead should be: inside a wall, inside another bead of its
+//! own fibre, or inside a bead of another fibre.
 //!
 //! Neither paper keeps a bead out of a wall: under SPM a wall is a slab of fluid moved by the
 //! penalty, under FPD a bounce-back face that only slows a bead near it, and a fibre tumbling
 //! or resting close to a wall can sink into it (docs/validation/spm.md, "A fibre next to a
 //! wall"). Nor does either keep two beads of one fibre apart that are not neighbours along
 //! it, and a soft fibre that folds or coils can pass through itself (spm.md, "Beads passing
-//! through each other"). The fibre node reports both every step: `wall_overlap`, how far the
-//! deepest bead's sphere reaches past a wall's face, and `self_overlap`, how deep two beads of
-//! one fibre reach into each other (0 while clear). The coordinator keeps the largest value
+//! through each other"), and neither keeps two fibres apart. The fibre node reports all three
+//! every step: `wall_overlap`, how far the deepest bead's sphere reaches past a wall's face,
+//! `self_overlap`, how deep two beads of one fibre reach into each other, and
+//! `fibre_overlap`, how deep beads of two fibres do (0 while clear). The coordinator keeps the largest value
 //! of each over the run and warns in the summary when it exceeds [`WARN_FRACTION`] of the
 //! smallest bead radius: the hydrodynamics and elasticity of the scene are then no longer
 //! those of solid beads.
 
 /// Overlaps above this fraction of the bead radius are warned about while some fibre has no
-/// contact (`fibre.N.wall_contact`, `fibre.N.self_contact`).
+/// contact (`fibre.N.wall_contact`, `fibre.N.self_contact`, `fibre.N.fibre_contact`).
 pub const WARN_FRACTION: f64 = 0.01;
 
 /// With the contact on every fibre, a bead pressed against a wall overlaps it by the contact
@@ -29,6 +30,9 @@ pub enum Overlap {
     Wall,
     /// Beads of one fibre inside each other (`self_overlap`; the contact `fibre.N.self_contact`).
     SelfOverlap,
+    /// Beads of two fibres inside each other (`fibre_overlap`; the contact
+    /// `fibre.N.fibre_contact`).
+    FibreOverlap,
 }
 
 impl Overlap {
@@ -37,6 +41,7 @@ impl Overlap {
         match self {
             Self::Wall => "wall_overlap",
             Self::SelfOverlap => "self_overlap",
+            Self::FibreOverlap => "fibre_overlap",
         }
     }
 
@@ -45,6 +50,7 @@ impl Overlap {
         match self {
             Self::Wall => "wall_contact",
             Self::SelfOverlap => "self_contact",
+            Self::FibreOverlap => "fibre_contact",
         }
     }
 }
@@ -58,7 +64,7 @@ pub struct OverlapWatch {
     pub step: u64,
 }
 
-/// Both watches of a run, as a checkpoint keeps them (each absent in checkpoints written
+/// The watches of a run, as a checkpoint keeps them (each absent in checkpoints written
 /// before it existed: then from the resume on).
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct OverlapWatches {
@@ -66,14 +72,18 @@ pub struct OverlapWatches {
     pub wall_watch: OverlapWatch,
     #[serde(default)]
     pub self_watch: OverlapWatch,
+    #[serde(default)]
+    pub fibre_watch: OverlapWatch,
 }
 
 impl OverlapWatches {
-    /// Take one step's diagnostics into both watches.
+    /// Take one step's diagnostics into every watch.
     pub fn observe(&mut self, step: u64, diagnostics: &[(String, f64)]) {
         self.wall_watch.observe(step, Overlap::Wall, diagnostics);
         self.self_watch
             .observe(step, Overlap::SelfOverlap, diagnostics);
+        self.fibre_watch
+            .observe(step, Overlap::FibreOverlap, diagnostics);
     }
 }
 
@@ -118,6 +128,10 @@ impl OverlapWatch {
                  the radius {bead_radius}) into each other (largest self_overlap, at step \
                  {step})"
             ),
+            Overlap::FibreOverlap => format!(
+                "beads of two fibres reached {largest:.4} grid spacings ({share:.1} % of the \
+                 radius {bead_radius}) into each other (largest fibre_overlap, at step {step})"
+            ),
         };
         if without_contact.is_empty() {
             w.push_str(&format!(
@@ -126,6 +140,7 @@ impl OverlapWatch {
                 match what {
                     Overlap::Wall => "wall contact",
                     Overlap::SelfOverlap => "self contact",
+                    Overlap::FibreOverlap => "contact between fibres",
                 }
             ));
         } else {
@@ -139,6 +154,7 @@ impl OverlapWatch {
                     "the beads of a fibre apart",
                     "Beads passing through each other",
                 ),
+                Overlap::FibreOverlap => ("two fibres apart", "Fibres passing through each other"),
             };
             w.push_str(&format!(
                 "; nothing keeps {kept} unless {} (docs/validation/spm.md, \"{doc}\")",
@@ -157,6 +173,7 @@ mod tests {
             ("kinetic_energy".into(), 1.0),
             ("wall_overlap".into(), wall),
             ("self_overlap".into(), beads),
+            ("fibre_overlap".into(), 2.0 * beads),
         ]
     }
 
@@ -174,19 +191,31 @@ mod tests {
             }
         );
         assert_eq!((w.self_watch.largest, w.self_watch.step), (0.4, 4));
+        assert_eq!((w.fibre_watch.largest, w.fibre_watch.step), (0.8, 4));
         // A report without the diagnostics (no fibre node) changes nothing.
         w.observe(5, &[("kinetic_energy".into(), 9.0)]);
-        assert_eq!((w.wall_watch.step, w.self_watch.step), (3, 4));
+        assert_eq!(
+            (w.wall_watch.step, w.self_watch.step, w.fibre_watch.step),
+            (3, 4, 4)
+        );
     }
 
     #[test]
     fn warns_past_a_hundredth_of_the_radius_or_a_tenth_with_contact() {
-        for what in [Overlap::Wall, Overlap::SelfOverlap] {
+        for what in [Overlap::Wall, Overlap::SelfOverlap, Overlap::FibreOverlap] {
             let key = what.contact_key();
+            // `report` gives fibre_overlap twice self_overlap.
+            let v = |x: f64| {
+                if what == Overlap::FibreOverlap {
+                    0.5 * x
+                } else {
+                    x
+                }
+            };
             let mut w = OverlapWatch::default();
-            w.observe(10, what, &report(0.039, 0.039));
+            w.observe(10, what, &report(0.039, v(0.039)));
             assert_eq!(w.warning(what, 4.0, &[0]), None);
-            w.observe(11, what, &report(0.76, 0.76));
+            w.observe(11, what, &report(0.76, v(0.76)));
             let msg = w.warning(what, 4.0, &[0, 2]).unwrap();
             assert!(msg.contains("0.7600") && msg.contains("19.0 %") && msg.contains("step 11"));
             assert!(msg.contains(&format!("fibre.0.{key} = true, fibre.2.{key} = true")));
@@ -195,7 +224,7 @@ mod tests {
             assert!(held.contains("too softly") && !held.contains(" = true"));
             // Every fibre held by the contact: only past a tenth of the radius.
             let mut w = OverlapWatch::default();
-            w.observe(1, what, &report(0.39, 0.39));
+            w.observe(1, what, &report(0.39, v(0.39)));
             assert_eq!(w.warning(what, 4.0, &[]), None);
             assert!(w.warning(what, 4.0, &[0]).is_some());
             // Clear all along: no warning whatever the radius.

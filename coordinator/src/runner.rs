@@ -302,8 +302,8 @@ fn radii(scene: &LoadedScene) -> Vec<f64> {
         .collect()
 }
 
-/// The summary's warnings about beads inside a wall (scenes with walls) and inside each
-/// other (`overlap_watch.rs`).
+/// The summary's warnings about beads inside a wall (scenes with walls), inside each other
+/// and inside another fibre's (scenes with two fibres or more; `overlap_watch.rs`).
 fn overlap_warnings(scene: &LoadedScene, watches: &OverlapWatches) -> Vec<String> {
     let radius = radii(scene).into_iter().fold(f64::INFINITY, f64::min);
     let without = |what: Overlap| -> Vec<usize> {
@@ -322,6 +322,10 @@ fn overlap_warnings(scene: &LoadedScene, watches: &OverlapWatches) -> Vec<String
     }
     let what = Overlap::SelfOverlap;
     out.extend(watches.self_watch.warning(what, radius, &without(what)));
+    if scene.scene.fibre.len() > 1 {
+        let what = Overlap::FibreOverlap;
+        out.extend(watches.fibre_watch.warning(what, radius, &without(what)));
+    }
     out
 }
 
@@ -431,7 +435,8 @@ struct RunState {
     /// Pipelined runs: the most steps sent to the nodes as one batch.
     largest_batch: u64,
     last_diagnostics: Vec<(String, f64)>,
-    /// The largest `wall_overlap` and `self_overlap` the fibre node reported, over every step.
+    /// The largest `wall_overlap`, `self_overlap` and `fibre_overlap` the fibre node reported,
+    /// over every step.
     watches: OverlapWatches,
     metrics: BTreeMap<String, crate::metrics::Metric>,
     /// Metrics asked for that could not be computed, with the reason.
@@ -483,13 +488,16 @@ impl RunState {
             .iter()
             .map(|(k, v)| (k.clone(), json!(v)))
             .collect();
-        // How far a bead reached into a wall (scenes with walls and fibres) and into another
-        // bead of its fibre (scenes with fibres; `overlap_watch.rs`).
+        // How far a bead reached into a wall (scenes with walls and fibres), into another bead
+        // of its fibre (scenes with fibres) and into a bead of another fibre (two fibres or
+        // more; `overlap_watch.rs`).
         let has_fibres = !scene.scene.fibre.is_empty();
         let largest = |w: &OverlapWatch| json!({ "value": w.largest, "step": w.step });
         let largest_wall_overlap =
             (scene.scene.walls.is_some() && has_fibres).then(|| largest(&self.watches.wall_watch));
         let largest_self_overlap = has_fibres.then(|| largest(&self.watches.self_watch));
+        let largest_fibre_overlap =
+            (scene.scene.fibre.len() > 1).then(|| largest(&self.watches.fibre_watch));
         let warnings = overlap_warnings(scene, &self.watches);
         json!({
             "scene": scene.name(),
@@ -519,6 +527,7 @@ impl RunState {
             "final_diagnostics": diagnostics,
             "largest_wall_overlap": largest_wall_overlap,
             "largest_self_overlap": largest_self_overlap,
+            "largest_fibre_overlap": largest_fibre_overlap,
             "warnings": warnings,
             "metrics": self.metrics,
             "metric_errors": self.metric_errors,

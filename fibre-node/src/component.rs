@@ -1,6 +1,8 @@
 //! The fibre node as a co-simulation component ([`cosim::Component`]).
 use crate::config::{parse_scene, Coupling, FibreGroup, ModelKind, SceneConfig, MAX_SUBSTEPS};
-use crate::fibre::{BeadKinematics, Fibre, Model};
+use crate::fibre::{together, BeadKinematics, Fibre, Model};
+use crate::fibre_contact::FibreContact;
+use crate::fibre_overlap::FibreOverlap;
 use crate::quaternion::{from_array, to_array, Vec3};
 use crate::self_overlap::SelfOverlap;
 use crate::spm_exchange;
@@ -15,7 +17,7 @@ use cosim::{
 use serde::{Deserialize, Serialize};
 
 /// Names of the diagnostics of every [`PhaseReport`], in their fixed order.
-pub const DIAGNOSTICS: [&str; 10] = [
+pub const DIAGNOSTICS: [&str; 11] = [
     "kinetic_energy",
     "stretch_energy",
     "bend_energy",
@@ -26,6 +28,7 @@ pub const DIAGNOSTICS: [&str; 10] = [
     "max_net_force",
     "wall_overlap",
     "self_overlap",
+    "fibre_overlap",
 ];
 
 /// Tag of the saved-state format.
@@ -57,6 +60,14 @@ struct Run {
     self_overlaps: Vec<SelfOverlap>,
     /// The `self_overlap` last measured, at the end of the last step.
     self_overlap: f64,
+    /// The watch over beads of different fibres reaching into each other (`fibre_overlap`;
+    /// `None` with one fibre), and its last value.
+    fibre_overlaps: Option<FibreOverlap>,
+    fibre_overlap: f64,
+    /// The contact between fibres (`fibre.N.fibre_contact` on two fibres or more).
+    fibre_contact: Option<FibreContact>,
+    /// Where each fibre's beads start among all beads (one more entry: the total).
+    offsets: Vec<usize>,
     total_beads: usize,
     /// How the fluid, if any, moves the fibres: SPM impulses are read in
     /// `FibreVelocities`; FPD runs `FibreForces` and `FibreAdvance` instead.
@@ -184,6 +195,9 @@ impl Run {
             for (f, w) in self.fibres.iter().zip(&mut self.self_overlaps) {
                 self.self_overlap = self.self_overlap.max(w.measure(&f.pos));
             }
+            if let Some(w) = &mut self.fibre_overlaps {
+                self.fibre_overlap = w.measure(self.fibres.iter().map(|f| &f.pos[..]));
+            }
         }
         let values = [
             ke,
@@ -196,6 +210,7 @@ impl Run {
             fmax,
             overlap,
             self.self_overlap,
+            self.fibre_overlap,
         ];
         PhaseReport {
             diagnostics: DIAGNOSTICS
@@ -264,6 +279,7 @@ impl Component for FibreComponent {
                 param("fibre.N.centred", "1", Some("false"), "true: start such that the fibre's midpoint lies at the centre of the gap between the walls, y = (ny - 1) / 2, x = nx / 2 (z = nz / 2), as S2023 place it; excludes start"),
                 param("fibre.N.direction", "1", Some("[1.0, 0.0, 0.0]"), "direction of the straight initial fibre (normalised; z = 0 in 2D)"),
                 param("fibre.N.spacing", len, Some("2 bead_radius"), "initial and rest distance between neighbouring beads"),
+                param("fibre.N.fibre_contact", "1", Some("false"), "true: its beads and those of every other fibre with the key repel while their spheres overlap (minimum image across the periodic box), with the smaller of the two fibres' axial bond stiffnesses; needs two such fibres and the same fibre.N.substeps on every fibre (off by default; without it fibres pass through each other: watch the fibre_overlap diagnostic)"),
                 param("fibre.N.self_contact", "1", Some("false"), "true: beads that are not neighbours along the chain repel while their spheres overlap, with the fibre's axial bond stiffness (excluded volume; neither paper has it, so off by default; without it a soft fibre that folds or coils can pass through itself: watch the self_overlap diagnostic)"),
                 param("fibre.N.wall_contact", "1", Some("false"), "true (scenes with walls): a bead whose sphere reaches past a wall's face is pushed back along the wall's normal, with the fibre's axial bond stiffness (frictionless; neither paper has it, so off by default; without it an SPM bead can sink into a wall slab: watch the wall_overlap diagnostic)"),
                 param("fibre.N.initial_bend", len, Some("0.0"), "amplitude of an S-shaped initial offset across direction (one sine wave along the fibre): seeds buckling; the fibre is at rest but not stress-free"),
@@ -564,6 +580,35 @@ impl Component for FibreComponent {
                 SelfOverlap::new(f.len(), cfg.bead_radius, cfg.spacing, dims)
             })
             .collect();
+        let dims = scene.dimensions as usize;
+        let fibre_overlaps = FibreOverlap::new(
+            &fibres
+                .iter()
+                .zip(&scene.fibres)
+                .map(|(f, cfg)| (f.len(), cfg.bead_radius))
+                .collect::<Vec<_>>(),
+            scene.periodic_box,
+            dims,
+        );
+        let mut fibre_contact = FibreContact::new(
+            &fibres
+                .iter()
+                .zip(&scene.fibres)
+                .map(|(f, cfg)| {
+                    let k = cfg.fibre_contact.then_some(f.contact_stiffness);
+                    (f.len(), cfg.bead_radius, k)
+                })
+                .collect::<Vec<_>>(),
+            scene.periodic_box,
+            dims,
+        );
+        if let Some(c) = &mut fibre_contact {
+            together::compute_forces(&mut fibres, c);
+        }
+        let mut offsets = vec![0];
+        for f in &fibres {
+            offsets.push(offsets.last().copied().unwrap_or(0) + f.len());
+        }
         let mut run = Run {
             coupling: scene.coupling,
             use_impulses: scene.coupling == Coupling::Spm,
@@ -571,6 +616,10 @@ impl Component for FibreComponent {
             fibres,
             self_overlaps,
             self_overlap: 0.0,
+            fibre_overlaps,
+            fibre_overlap: 0.0,
+            fibre_contact,
+            offsets,
             total_beads,
             forces_current: true,
             pending: None,
@@ -612,6 +661,9 @@ impl Component for FibreComponent {
         match phase {
             Phase::FibreForces => {
                 run.forces.clear();
+                if let Some(c) = &mut run.fibre_contact {
+                    c.apply(&mut run.fibres);
+                }
                 for f in run.fibres.iter_mut() {
                     f.fpd_forces();
                     run.forces
@@ -651,8 +703,13 @@ impl Component for FibreComponent {
                          velocities of step {p} are still pending"
                     )));
                 }
-                for f in run.fibres.iter_mut() {
-                    f.advance_positions(dt);
+                match &mut run.fibre_contact {
+                    Some(c) => together::advance_positions(&mut run.fibres, c, dt),
+                    None => {
+                        for f in run.fibres.iter_mut() {
+                            f.advance_positions(dt);
+                        }
+                    }
                 }
                 run.forces_current = true;
                 run.pending = Some(step);
@@ -677,15 +734,25 @@ impl Component for FibreComponent {
                 } else {
                     None
                 };
-                let mut offset = 0;
-                for f in run.fibres.iter_mut() {
-                    let n = f.len();
-                    f.advance_velocities(
+                match &mut run.fibre_contact {
+                    Some(c) => together::advance_velocities(
+                        &mut run.fibres,
+                        c,
                         dt,
-                        impulses.map(|j| &j[offset..offset + n]),
+                        impulses,
+                        &run.offsets,
                         run.forces_current,
-                    );
-                    offset += n;
+                    ),
+                    None => {
+                        for (k, f) in run.fibres.iter_mut().enumerate() {
+                            let (a, b) = (run.offsets[k], run.offsets[k + 1]);
+                            f.advance_velocities(
+                                dt,
+                                impulses.map(|j| &j[a..b]),
+                                run.forces_current,
+                            );
+                        }
+                    }
                 }
                 run.forces_current = true;
                 run.pending = None;
@@ -796,6 +863,9 @@ impl Component for FibreComponent {
                 }
             }
             f.compute_forces();
+        }
+        if let Some(c) = &mut run.fibre_contact {
+            together::compute_forces(&mut run.fibres, c);
         }
         if saved.held.len() == 3 * run.total_beads {
             let mut held = saved.held.iter().map(|b| f64::from_bits(*b));

@@ -61,6 +61,9 @@ pub struct FibreConfig {
     pub initial_bend: f64,
     /// Non-neighbouring beads repel while they overlap ([`crate::self_contact`]).
     pub self_contact: bool,
+    /// Its beads and those of every other fibre with the key repel while they overlap
+    /// ([`crate::fibre_contact`]).
+    pub fibre_contact: bool,
     /// `fibre.N.wall_contact = true`: the y of the bottom and the top wall's face, which the
     /// beads are kept behind ([`crate::wall_contact`]); `None` without it.
     pub wall_contact: Option<[f64; 2]>,
@@ -118,6 +121,9 @@ pub struct SceneConfig {
     /// y of the bottom and the top wall's face, where the scene has walls
     /// ([`cosim::scene_keys::wall_faces`]): the `wall_overlap` diagnostic measures from them.
     pub wall_faces: Option<[f64; 2]>,
+    /// The fluid box's length along each axis on which beads of two fibres meet across the
+    /// seam ([`periodic_box`]); all `None` without a fluid.
+    pub periodic_box: [Option<f64>; 3],
     pub fibres: Vec<FibreConfig>,
 }
 
@@ -171,6 +177,8 @@ struct RawFibre {
     initial_bend: Option<f64>,
     #[serde(default)]
     self_contact: bool,
+    #[serde(default)]
+    fibre_contact: bool,
     #[serde(default)]
     wall_contact: bool,
     #[serde(default)]
@@ -363,6 +371,8 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         }
     }
 
+    check_fibre_contact(&fibres)?;
+
     Ok(SceneConfig {
         dimensions,
         dt,
@@ -375,7 +385,57 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
             .then(|| shear_flow(&table, "").ok())
             .flatten(),
         wall_faces,
+        periodic_box: periodic_box(&table, dimensions),
         fibres,
+    })
+}
+
+/// `fibre.N.fibre_contact` needs a second fibre with the key, and every fibre of the scene
+/// on the same sub-steps: the fibres then step together ([`crate::fibre::together`]).
+fn check_fibre_contact(fibres: &[FibreConfig]) -> Result<(), String> {
+    let with: Vec<usize> = (0..fibres.len())
+        .filter(|&n| fibres[n].fibre_contact)
+        .collect();
+    match with[..] {
+        [] => return Ok(()),
+        [n] => {
+            return Err(format!(
+                "fibre.{n}.fibre_contact = true: no other fibre of the scene has it, so there \
+                 is nothing for it to push against; set it on every fibre that should keep \
+                 clear of the others (both fibres of a pair need it), or remove the key"
+            ))
+        }
+        _ => {}
+    }
+    let n0 = fibres[0].substeps;
+    if let Some(n) = (0..fibres.len()).find(|&n| fibres[n].substeps != n0) {
+        return Err(format!(
+            "fibre.{}.fibre_contact = true: with contact between fibres all fibres take their \
+             sub-steps together, so they need the same fibre.N.substeps (fibre.0.substeps = \
+             {n0}, fibre.{n}.substeps = {}); set them equal, to the largest",
+            with[0], fibres[n].substeps
+        ));
+    }
+    Ok(())
+}
+
+/// The axes along which the fluid's box wraps for the beads, with its lengths (grid units,
+/// `fluid.grid`): x always; y without walls (SPM's slabs also sit in a box periodic in y,
+/// but no bead crosses them, and FPD's walls bound the lattice); z in 3D. All `None` without
+/// a fluid (a dry fibre lives in unbounded space). Read, not validated: the fluid node
+/// checks `fluid.grid`.
+pub fn periodic_box(table: &toml::Table, dimensions: u8) -> [Option<f64>; 3] {
+    let grid: Vec<f64> = table
+        .get("fluid")
+        .and_then(|f| f.get("grid"))
+        .and_then(|g| g.as_array())
+        .map(|g| g.iter().filter_map(toml_number).collect())
+        .unwrap_or_default();
+    let wraps = [true, !table.contains_key("walls"), dimensions == 3];
+    std::array::from_fn(|a| {
+        grid.get(a)
+            .copied()
+            .filter(|l| wraps[a] && l.is_finite() && *l > 0.0)
     })
 }
 
@@ -733,6 +793,7 @@ fn validate_fibre(
         spacing,
         initial_bend,
         self_contact: raw.self_contact,
+        fibre_contact: raw.fibre_contact,
         wall_contact,
         centred: raw.centred,
         clamp,

@@ -9,8 +9,9 @@ pub struct Energies {
     pub bend: f64,
     /// Torsion (L2020 eqs. 19-20). Zero in 2D and for the bead-spring model.
     pub twist: f64,
-    /// Overlap of non-neighbouring beads (`fibre.N.self_contact`) and of beads with the walls
-    /// (`fibre.N.wall_contact`); zero without either.
+    /// Overlap of non-neighbouring beads (`fibre.N.self_contact`), of beads with the walls
+    /// (`fibre.N.wall_contact`) and, half of each pair's, of beads with another fibre's
+    /// (`fibre.N.fibre_contact`); zero without any.
     pub contact: f64,
 }
 

@@ -70,6 +70,7 @@ use cosim::{BeadImpulse, BeadState};
 use std::f64::consts::PI;
 
 mod chord_spin;
+pub mod together;
 
 /// The elastic model of a fibre.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -124,6 +125,14 @@ pub struct Fibre {
     pub self_contact: Option<SelfContact>,
     /// Beads kept behind the walls' faces (`fibre.N.wall_contact`).
     pub wall_contact: Option<WallContact>,
+    /// Spring constant of the contacts (the axial bond stiffness; force / length).
+    pub contact_stiffness: f64,
+    /// `fibre.N.fibre_contact`: the forces the other fibres' beads push this fibre's with,
+    /// set by [`crate::fibre_contact::FibreContact::apply`] before each force evaluation and
+    /// added by it (empty without the key).
+    pub fibre_contact_force: Vec<Vec3>,
+    /// This fibre's share of the contact energy with other fibres (half of each pair's).
+    pub fibre_contact_energy: f64,
     /// Whether hydrodynamic impulses act (the scene has a fluid).
     pub hydrodynamic: bool,
     /// The previous step's hydrodynamic impulse per bead: the predictor's force times dt
@@ -329,6 +338,13 @@ impl Fibre {
             energies: Energies::default(),
             self_contact,
             wall_contact,
+            contact_stiffness,
+            fibre_contact_force: if cfg.fibre_contact {
+                vec![Vec3::zeros(); n]
+            } else {
+                Vec::new()
+            },
+            fibre_contact_energy: 0.0,
             hydrodynamic: with_fluid,
             predicted_impulse: vec![Vec3::zeros(); n],
             predicted_angular_impulse: vec![Vec3::zeros(); n],
@@ -395,6 +411,12 @@ impl Fibre {
         }
         if let Some(c) = &self.wall_contact {
             self.energies.contact += c.add_forces(&self.pos, &mut self.force);
+        }
+        if !self.fibre_contact_force.is_empty() {
+            for (f, c) in self.force.iter_mut().zip(&self.fibre_contact_force) {
+                *f += c;
+            }
+            self.energies.contact += self.fibre_contact_energy;
         }
     }
 
@@ -597,25 +619,38 @@ impl Fibre {
     /// predictor (module documentation): the start state is kept and the kicks carry the
     /// previous step's impulses.
     pub fn advance_positions(&mut self, dt: f64) {
+        let hydro = self.begin_positions();
+        self.sub_steps(dt, hydro);
+        self.end_positions();
+    }
+
+    /// Before the sub-steps of `FibrePositions`: the predictor keeps the start state. Returns
+    /// what the kicks carry.
+    fn begin_positions(&mut self) -> HydroKick<'static> {
+        if !self.corrects() {
+            return HydroKick::None;
+        }
+        self.start.clear();
+        for k in 0..self.pos.len() {
+            self.start.push(BeadKinematics {
+                pos: self.pos[k],
+                quat: self.quat[k],
+                vel: self.vel[k],
+                omega: self.omega[k],
+            });
+        }
+        HydroKick::Predicted
+    }
+
+    /// After the sub-steps of `FibrePositions`.
+    fn end_positions(&mut self) {
         if self.corrects() {
-            self.start.clear();
-            for k in 0..self.pos.len() {
-                self.start.push(BeadKinematics {
-                    pos: self.pos[k],
-                    quat: self.quat[k],
-                    vel: self.vel[k],
-                    omega: self.omega[k],
-                });
-            }
-            self.sub_steps(dt, HydroKick::Predicted);
             // The momentum exchange measures the fluid against the velocities the last
             // penalty imposed: publish the predicted positions with the start velocities.
             for (k, b) in self.start.iter().enumerate() {
                 self.vel[k] = b.vel;
                 self.omega[k] = b.omega;
             }
-        } else {
-            self.sub_steps(dt, HydroKick::None);
         }
     }
 
@@ -629,19 +664,12 @@ impl Fibre {
         forces_current: bool,
     ) {
         let h = dt / self.substeps as f64;
-        match impulses {
-            Some(imp) if self.corrects() && self.start.len() == self.pos.len() => {
-                for (k, b) in self.start.iter().enumerate() {
-                    self.pos[k] = b.pos;
-                    self.quat[k] = b.quat;
-                    self.vel[k] = b.vel;
-                    self.omega[k] = b.omega;
-                }
-                let share = 1.0 / self.substeps as f64;
-                self.sub_steps(dt, HydroKick::Share(imp, share));
-                self.kick(h, HydroKick::Share(imp, share));
+        match self.begin_velocities(impulses) {
+            Some(hydro) => {
+                self.sub_steps(dt, hydro);
+                self.kick(h, hydro);
             }
-            _ => {
+            None => {
                 if !forces_current {
                     self.compute_forces();
                 }
@@ -649,6 +677,30 @@ impl Fibre {
                 self.kick(h, hydro);
             }
         }
+        self.end_velocities(impulses);
+    }
+
+    /// Before `FibreVelocities`: with impulses and a kept start state, the corrector goes
+    /// back to the start and returns what its kicks carry; `None`: the plain last kick.
+    fn begin_velocities<'a>(
+        &mut self,
+        impulses: Option<&'a [BeadImpulse]>,
+    ) -> Option<HydroKick<'a>> {
+        let imp = impulses?;
+        if !(self.corrects() && self.start.len() == self.pos.len()) {
+            return None;
+        }
+        for (k, b) in self.start.iter().enumerate() {
+            self.pos[k] = b.pos;
+            self.quat[k] = b.quat;
+            self.vel[k] = b.vel;
+            self.omega[k] = b.omega;
+        }
+        Some(HydroKick::Share(imp, 1.0 / self.substeps as f64))
+    }
+
+    /// After `FibreVelocities`: the impulses become the next predictor's.
+    fn end_velocities(&mut self, impulses: Option<&[BeadImpulse]>) {
         if let Some(imp) = impulses {
             for (k, j) in imp.iter().enumerate() {
                 self.predicted_impulse[k] = Vec3::from(j.impulse);

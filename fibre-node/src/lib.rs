@@ -7,16 +7,23 @@
 //! - [`wall_contact`]: optional contact of the beads with the walls' faces;
 //! - [`self_overlap`]: the `self_overlap` diagnostic, how deep a fibre's beads reach into
 //!   each other (cell list, checked only when the beads may have met);
+//! - [`bead_pairs`]: a cell list over the beads of all fibres that knows the periodic box;
+//! - [`fibre_contact`]: optional excluded volume between fibres;
+//! - [`fibre_overlap`]: the `fibre_overlap` diagnostic, how deep beads of two fibres reach
+//!   into each other;
 //! - [`stability`]: the beam-stiffness time-step limit;
 //! - [`config`]: the `[[fibre]]` part of a scene;
 //! - [`component`]: [`FibreComponent`], the [`cosim::Component`] the executable serves;
 //! - [`quaternion`]: rotation helpers (L2020 eqs. 3-4 and appendix A).
+pub mod bead_pairs;
 pub mod bead_spring;
 pub mod cohesive_beam;
 pub mod component;
 pub mod config;
 pub mod energies;
 pub mod fibre;
+pub mod fibre_contact;
+pub mod fibre_overlap;
 #[cfg(test)]
 mod gradient_check;
 pub mod quaternion;
