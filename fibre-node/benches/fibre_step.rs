@@ -1,7 +1,9 @@
 //! Time of one full fibre step (fibre-positions + fibre-velocities, including the bead-state
 //! publications on an in-process exchange), 3D, for both models at 10, 100 and 1000 beads.
 //! Throughput is reported per bead. Also the full check of the `self_overlap` diagnostic on a
-//! coil that overlaps itself (so that no check is skipped), 3D, 1000 and 100 000 beads.
+//! coil that overlaps itself (so that no check is skipped), 3D, 1000 and 100 000 beads. And
+//! one step of a dry suspension of 10-bead fibres, 3D, 100 and 1000 fibres, with and without
+//! `fibre.N.fibre_contact` (the `fibre_overlap` diagnostic measured in both).
 use cosim::{Component, InProcessExchange, Phase};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use fibre_node::quaternion::Vec3;
@@ -88,5 +90,57 @@ fn bench_self_overlap(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench, bench_self_overlap);
+/// `fibres` straight 10-bead bead-spring fibres (unit beads, touching) at random places and
+/// directions in a cube filled to a bead volume fraction of about 5 %, lightly damped, no
+/// fluid (xorshift, fixed seed). Many start overlapping, so the contact has work to do.
+fn suspension(fibres: usize, contact: bool) -> String {
+    let beads = 10;
+    let side = (fibres as f64 * beads as f64 * 4.19 / 0.05).cbrt();
+    let mut seed = 0x9E37_79B9_7F4A_7C15_u64;
+    let mut uniform = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut s = String::from("dimensions = 3\n[time]\ndt = 0.05\n");
+    for _ in 0..fibres {
+        let d = Vec3::new(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).normalize();
+        let (x, y, z) = (side * uniform(), side * uniform(), side * uniform());
+        s.push_str(&format!(
+            "[[fibre]]\nmodel = \"bead-spring\"\nbeads = {beads}\nbead_radius = 1\n\
+             youngs_modulus = 1\nstretch_stiffness = 4\nbending_stiffness = 1\n\
+             damping = 0.1\nfibre_contact = {contact}\nstart = [{x}, {y}, {z}]\n\
+             direction = [{}, {}, {}]\n",
+            d.x, d.y, d.z
+        ));
+    }
+    s
+}
+
+fn bench_suspension(c: &mut Criterion) {
+    let mut group = c.benchmark_group("suspension_step_3d");
+    for fibres in [100usize, 1000] {
+        for contact in [false, true] {
+            let mut comp = FibreComponent::new();
+            let mut x = InProcessExchange::new();
+            comp.configure(&suspension(fibres, contact), &mut x)
+                .unwrap();
+            let mut n = 0u64;
+            group.throughput(Throughput::Elements(10 * fibres as u64));
+            let id = if contact { "contact" } else { "no-contact" };
+            group.bench_with_input(BenchmarkId::new(id, fibres), &fibres, |b, _| {
+                b.iter(|| {
+                    comp.run_phase(n, Phase::FibrePositions, &mut x).unwrap();
+                    let r = comp.run_phase(n, Phase::FibreVelocities, &mut x).unwrap();
+                    n += 1;
+                    std::hint::black_box(r)
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench, bench_self_overlap, bench_suspension);
 criterion_main!(benches);

@@ -30,6 +30,13 @@ pub struct BeadPairs {
     width: [f64; 3],
     /// Cells along each periodic axis (unused for the others).
     cells: [i64; 3],
+    /// The offsets to the neighbouring cells that a bead looks into, distinct after
+    /// wrapping. Half the stencil: its own cell (the beads after it) and the 13 (2D: 4)
+    /// cells ahead of it, each other cell seen from one side only. With a periodic axis of two
+    /// cells, where ahead and behind are one cell, every neighbouring cell, the beads after
+    /// it.
+    stencil: Vec<[i64; 3]>,
+    half: bool,
     planar: bool,
     /// Each bead's cell, bucket and the beads in bucket order (empty: all pairs).
     cell_of: Vec<[i64; 3]>,
@@ -57,6 +64,25 @@ impl BeadPairs {
                 width[a] = l / n as f64;
             }
         }
+        let along: [Vec<i64>; 3] = std::array::from_fn(|a| match period[a] {
+            _ if planar && a == 2 => vec![0],
+            Some(_) if cells[a] < 3 => (0..cells[a]).collect(),
+            _ => vec![-1, 0, 1],
+        });
+        // Along a periodic axis of two cells, ahead and behind are the same cell.
+        let half = along.iter().all(|o| o.len() != 2);
+        let mut stencil = Vec::new();
+        for &ox in &along[0] {
+            for &oy in &along[1] {
+                for &oz in &along[2] {
+                    // Ahead: the first non-zero offset positive (or the cell itself).
+                    let o = [ox, oy, oz];
+                    if !half || o.iter().find(|&&x| x != 0).is_none_or(|&x| x > 0) {
+                        stencil.push(o);
+                    }
+                }
+            }
+        }
         let listed = beads > ALL_PAIRS_UP_TO;
         let buckets = if listed {
             (2 * beads).next_power_of_two()
@@ -67,6 +93,8 @@ impl BeadPairs {
             period,
             width,
             cells,
+            stencil,
+            half,
             planar,
             cell_of: vec![[0; 3]; if listed { beads } else { 0 }],
             bucket_of: vec![0; if listed { beads } else { 0 }],
@@ -114,8 +142,9 @@ impl BeadPairs {
         (h >> (64 - buckets.trailing_zeros())) as usize
     }
 
-    /// Visit every pair `i < j` within `reach` of each other exactly once (and possibly some
-    /// further apart), as `visit(i, j, X_i - X_j)` with the minimum-image separation.
+    /// Visit every pair of beads within `reach` of each other exactly once (and possibly some
+    /// further apart), as `visit(i, j, X_i - X_j)` with the minimum-image separation; `i` and
+    /// `j` may come in either order.
     pub fn for_each_pair(&mut self, pos: &[Vec3], mut visit: impl FnMut(usize, usize, Vec3)) {
         if self.order.is_empty() {
             for i in 0..pos.len() {
@@ -127,36 +156,23 @@ impl BeadPairs {
         }
         debug_assert_eq!(pos.len(), self.order.len());
         self.fill(pos);
-        let axes = if self.planar { 2 } else { 3 };
         for i in 0..pos.len() {
             let c = self.cell_of[i];
-            // The distinct buckets of the neighbouring cells: a short periodic axis (one or
-            // two cells) or a hash collision would otherwise visit a bucket twice.
-            let mut near = [usize::MAX; 27];
-            let mut count = 0;
-            let span = |a: usize| if a < axes { -1..=1 } else { 0..=0 };
-            for ox in span(0) {
-                for oy in span(1) {
-                    for oz in span(2) {
-                        let mut n = [c[0] + ox, c[1] + oy, c[2] + oz];
-                        for (a, na) in n.iter_mut().enumerate() {
-                            if self.period[a].is_some() {
-                                *na = na.rem_euclid(self.cells[a]);
-                            }
-                        }
-                        let b = self.bucket(n);
-                        if !near[..count].contains(&b) {
-                            near[count] = b;
-                            count += 1;
-                        }
+            // A bucket may also hold beads of other cells (hash collisions): they are passed
+            // over, so each pair is seen once, from the side the stencil gives.
+            for o in &self.stencil {
+                let mut n = [c[0] + o[0], c[1] + o[1], c[2] + o[2]];
+                for (a, na) in n.iter_mut().enumerate() {
+                    if self.period[a].is_some() {
+                        *na = na.rem_euclid(self.cells[a]);
                     }
                 }
-            }
-            for &b in &near[..count] {
+                let after_only = !self.half || *o == [0; 3];
+                let b = self.bucket(n);
                 let (lo, hi) = (self.start[b] as usize, self.start[b + 1] as usize);
                 for &j in &self.order[lo..hi] {
                     let j = j as usize;
-                    if j > i {
+                    if (j > i || !after_only) && self.cell_of[j] == n {
                         visit(i, j, self.separation(&pos[i], &pos[j]));
                     }
                 }
@@ -213,6 +229,10 @@ mod tests {
         assert!(pos.len() <= ALL_PAIRS_UP_TO || !listed.order.is_empty());
         let mut got = Vec::new();
         listed.for_each_pair(pos, |i, j, d| {
+            // Either order: as (lower, higher), the separation turned with it (exactly, but
+            // for the sign of a zero).
+            let (i, j, d) = if i < j { (i, j, d) } else { (j, i, -d) };
+            let d = d.map(|x| x + 0.0);
             if d.norm() < reach {
                 got.push((i, j, [d.x.to_bits(), d.y.to_bits(), d.z.to_bits()]));
             }
@@ -221,7 +241,7 @@ mod tests {
         let mut want = Vec::new();
         for i in 0..pos.len() {
             for j in i + 1..pos.len() {
-                let d = all.separation(&pos[i], &pos[j]);
+                let d = all.separation(&pos[i], &pos[j]).map(|x| x + 0.0);
                 if d.norm() < reach {
                     want.push((i, j, [d.x.to_bits(), d.y.to_bits(), d.z.to_bits()]));
                 }

@@ -189,3 +189,36 @@ fn the_description_offers_fpd() {
     assert!(d.coupling_schemes.iter().any(|s| s == "fpd"));
     assert!(d.phases.contains(&Phase::FibreForces) && d.phases.contains(&Phase::FibreAdvance));
 }
+
+/// Under FPD the contact between fibres (`fibre.N.fibre_contact`) is one more force the
+/// fibre node publishes: a second fibre 3 above the first (beads of radius 2, so each bead
+/// 1 deep in the one below it, and the diagonal neighbours 5 apart, clear) adds k_c * 1
+/// along y to each pair, k_c = k_s / l0^2 = 30 / 16 (the axial bond stiffness, S2023
+/// eq. 11). Reference: the contact law; exact to round-off.
+#[test]
+fn fpd_forces_carry_the_contact_between_fibres() {
+    let forces = |contact: bool| {
+        let second = FPD_SCENE
+            .split("[[fibre]]")
+            .nth(1)
+            .unwrap()
+            .replace("start = [10.0, 10.0, 0.0]", "start = [10.0, 13.0, 0.0]");
+        let scene = format!("{FPD_SCENE}[[fibre]]{second}").replace(
+            "loads = [",
+            &format!("fibre_contact = {contact}\nloads = ["),
+        );
+        let (mut c, mut x) = configured(&scene);
+        c.run_phase(0, Phase::FibreForces, &mut x).unwrap();
+        let mut f = Vec::new();
+        x.read_forces(Port::BeadForces, &mut f).unwrap();
+        f
+    };
+    let (with, without) = (forces(true), forces(false));
+    assert_eq!(with.len(), 8);
+    for k in 0..8 {
+        let sign = if k < 4 { -1.0 } else { 1.0 };
+        let dy = with[k].force[1] - without[k].force[1];
+        assert!((dy - sign * 30.0 / 16.0).abs() < 1e-12, "bead {k}: {dy}");
+        assert_eq!(with[k].force[0], without[k].force[0], "bead {k}");
+    }
+}
