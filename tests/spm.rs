@@ -334,6 +334,39 @@ fn a_fibre_rests_on_another_through_the_contact_between_fibres() {
     assert!(w.contains("fibre.1.fibre_contact = true"), "{w}");
 }
 
+/// Two short fibres meeting end to end in the built-in example's Couette flow
+/// (`configs/spm/fibres_in_shear.toml`), 12 000 steps. The SPM fluid between them does not
+/// keep them apart: without `fibre.N.fibre_contact` their near beads sink 6.90 of their
+/// diameter 8 into each other (measured, step 11 445) and the pair turns as one body. With
+/// the contact they touch, 0.016 deep at most (0.4 % of the radius). Reference: the beads'
+/// spheres. Tolerances: without contact past half the radius, with it below a hundredth of
+/// it (the summary's warning threshold).
+#[test]
+fn fibres_meeting_in_shear_sink_into_each_other_unless_the_contact_holds_them() {
+    let run = |contact: bool| {
+        let o = overrides(
+            &["time.steps=12000"],
+            &[
+                format!("fibre.0.fibre_contact={contact}"),
+                format!("fibre.1.fibre_contact={contact}"),
+            ],
+        );
+        let name = format!("spm-fibres-in-shear-{contact}");
+        let s = run_in_process(&config("spm/fibres_in_shear.toml"), &o, &name);
+        assert_eq!(s["status"], "completed", "{s}");
+        let largest = s["largest_fibre_overlap"]["value"].as_f64().unwrap();
+        assert_one_warning_without_contact(&s, contact, largest, "fibre_contact");
+        largest
+    };
+    let (free, held) = (run(false), run(true));
+    println!("largest fibre overlap: free {free:.4}, with the contact {held:.5}");
+    assert!(
+        free > 2.0,
+        "without contact the fibres overlapped only {free}"
+    );
+    assert!(held < 0.04, "with contact the fibres overlapped {held}");
+}
+
 /// A fibre lying along the bottom wall of the built-in example (`configs/spm/tumbling.toml`,
 /// 96^2, slabs of 4: face at y = 3.5), bead 0 touching it (y = 7.5 + 0.5), 14 000 steps.
 /// Nothing in SPM keeps a bead out of a wall slab: the fibre tilts and its leading end sinks
