@@ -180,32 +180,43 @@ impl BeadPairs {
         }
     }
 
-    /// Sort the beads into their buckets (a counting sort: bucket starts as a prefix sum).
+    /// Sort the beads into their buckets.
     fn fill(&mut self, pos: &[Vec3]) {
-        let buckets = self.start.len() - 1;
-        self.start.fill(0);
         for (i, p) in pos.iter().enumerate() {
             let c = self.cell(p);
-            let b = self.bucket(c);
             self.cell_of[i] = c;
-            self.bucket_of[i] = b as u32;
-            self.start[b + 1] += 1;
+            self.bucket_of[i] = self.bucket(c) as u32;
         }
-        for b in 0..buckets {
-            self.start[b + 1] += self.start[b];
-        }
-        // Scatter, each start serving as its bucket's cursor.
-        for i in 0..pos.len() {
-            let b = self.bucket_of[i] as usize;
-            self.order[self.start[b] as usize] = i as u32;
-            self.start[b] += 1;
-        }
-        // The cursors ended on the next bucket's start; shift back.
-        for b in (1..=buckets).rev() {
-            self.start[b] = self.start[b - 1];
-        }
-        self.start[0] = 0;
+        sort_into_buckets(
+            &self.bucket_of[..pos.len()],
+            &mut self.start,
+            &mut self.order,
+        );
     }
+}
+
+/// A counting sort of the beads by bucket: on return `order[start[b]..start[b + 1]]` holds
+/// the beads of bucket `b` in increasing index order. `start` has one entry more than
+/// there are buckets; `order` one a bead.
+pub(crate) fn sort_into_buckets(bucket_of: &[u32], start: &mut [u32], order: &mut [u32]) {
+    let buckets = start.len() - 1;
+    start.fill(0);
+    for &b in bucket_of {
+        start[b as usize + 1] += 1;
+    }
+    for b in 0..buckets {
+        start[b + 1] += start[b];
+    }
+    // Scatter, each start serving as its bucket's cursor.
+    for (i, &b) in bucket_of.iter().enumerate() {
+        order[start[b as usize] as usize] = i as u32;
+        start[b as usize] += 1;
+    }
+    // The cursors ended on the next bucket's start; shift back.
+    for b in (1..=buckets).rev() {
+        start[b] = start[b - 1];
+    }
+    start[0] = 0;
 }
 
 #[cfg(test)]

@@ -419,18 +419,23 @@ fn check_fibre_contact(fibres: &[FibreConfig]) -> Result<(), String> {
     Ok(())
 }
 
+/// `fluid.grid` as numbers (empty without it). Read, not validated: the fluid node checks it.
+fn fluid_grid(table: &toml::Table) -> Vec<f64> {
+    table
+        .get("fluid")
+        .and_then(|f| f.get("grid"))
+        .and_then(|g| g.as_array())
+        .map(|g| g.iter().filter_map(toml_number).collect())
+        .unwrap_or_default()
+}
+
 /// The axes along which the fluid's box wraps for the beads, with its lengths (grid units,
 /// `fluid.grid`): x always; y without walls (SPM's slabs also sit in a box periodic in y,
 /// but no bead crosses them, and FPD's walls bound the lattice); z in 3D. All `None` without
 /// a fluid (a dry fibre lives in unbounded space). Read, not validated: the fluid node
 /// checks `fluid.grid`.
 pub fn periodic_box(table: &toml::Table, dimensions: u8) -> [Option<f64>; 3] {
-    let grid: Vec<f64> = table
-        .get("fluid")
-        .and_then(|f| f.get("grid"))
-        .and_then(|g| g.as_array())
-        .map(|g| g.iter().filter_map(toml_number).collect())
-        .unwrap_or_default();
+    let grid = fluid_grid(table);
     let wraps = [true, !table.contains_key("walls"), dimensions == 3];
     std::array::from_fn(|a| {
         grid.get(a)
@@ -473,12 +478,7 @@ pub fn shear_flow(table: &toml::Table, need: &str) -> Result<ShearFlow, String> 
 /// y = -1/2 and ny - 1/2 and between the SPM slabs' faces at T - 1/2 and ny - T - 1/2; along
 /// the periodic axes x = nx / 2 (and z = nz / 2 in 3D).
 fn centre_in_gap(table: &toml::Table, p: &str, f: &FibreConfig) -> Result<[f64; 3], String> {
-    let grid: Vec<f64> = table
-        .get("fluid")
-        .and_then(|f| f.get("grid"))
-        .and_then(|g| g.as_array())
-        .map(|g| g.iter().filter_map(toml_number).collect())
-        .unwrap_or_default();
+    let grid = fluid_grid(table);
     if grid.len() < 2 || !table.contains_key("walls") {
         return Err(format!(
             "{p}.centred = true needs a fluid between walls: fluid.grid and walls.velocity"

@@ -140,27 +140,14 @@ impl SelfOverlap {
     /// As [`Self::all_pairs`] over the pairs in neighbouring cells; pairs further apart are
     /// at least a cell apart, so the result is capped at the skin.
     fn cell_list(&mut self, pos: &[Vec3]) -> f64 {
-        let buckets = self.start.len() - 1;
-        self.start.fill(0);
         for (i, p) in pos.iter().enumerate() {
-            let b = self.bucket(self.cell_of(p));
-            self.bucket_of[i] = b as u32;
-            self.start[b + 1] += 1;
+            self.bucket_of[i] = self.bucket(self.cell_of(p)) as u32;
         }
-        for b in 0..buckets {
-            self.start[b + 1] += self.start[b];
-        }
-        // Scatter, each start serving as its bucket's cursor.
-        for i in 0..pos.len() {
-            let b = self.bucket_of[i] as usize;
-            self.order[self.start[b] as usize] = i as u32;
-            self.start[b] += 1;
-        }
-        // The cursors ended on the next bucket's start; shift back.
-        for b in (1..=buckets).rev() {
-            self.start[b] = self.start[b - 1];
-        }
-        self.start[0] = 0;
+        crate::bead_pairs::sort_into_buckets(
+            &self.bucket_of[..pos.len()],
+            &mut self.start,
+            &mut self.order,
+        );
         let mut least = self.cell - self.diameter;
         let dz: &[i64] = if self.planar { &[0] } else { &[-1, 0, 1] };
         for (i, p) in pos.iter().enumerate() {
