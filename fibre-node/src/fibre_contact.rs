@@ -11,8 +11,8 @@
 //! The fibres then depend on each other within a step: the fibre node takes their sub-steps
 //! together ([`crate::fibre::together`]), refreshing the contact before every force
 //! evaluation, which needs the same `fibre.N.substeps` on every fibre.
-use crate::bead_pairs::BeadPairs;
 use crate::fibre::Fibre;
+use crate::near_pairs::NearPairs;
 use crate::quaternion::Vec3;
 
 /// The contact between the fibres of a scene.
@@ -22,7 +22,7 @@ pub struct FibreContact {
     fibre_of: Vec<u32>,
     radius: Vec<f64>,
     stiffness: Vec<f64>,
-    pairs: BeadPairs,
+    pairs: NearPairs,
     /// Gathered positions, and the forces and energy per bead (half a pair's each).
     pos: Vec<Vec3>,
     force: Vec<Vec3>,
@@ -48,12 +48,13 @@ impl FibreContact {
             stiffness.extend(std::iter::repeat_n(k.unwrap_or(0.0), beads));
         }
         let beads = radius.len();
-        let reach = 2.0 * radius.iter().cloned().fold(0.0, f64::max);
+        let largest = radius.iter().cloned().fold(0.0, f64::max);
         Some(Self {
             fibre_of,
             radius,
             stiffness,
-            pairs: BeadPairs::new(beads, reach, period, dims),
+            // Rebuilt once a bead has moved a quarter of the largest radius.
+            pairs: NearPairs::new(beads, 2.0 * largest, 0.5 * largest, period, dims),
             pos: Vec::with_capacity(beads),
             force: vec![Vec3::zeros(); beads],
             energy: vec![0.0; beads],
@@ -81,17 +82,16 @@ impl FibreContact {
         }
     }
 
-    /// Forces and energies at `self.pos`, pairs in the cell list's order.
+    /// Forces and energies at `self.pos`, pairs in the Verlet list's order.
     fn evaluate(&mut self) {
         self.force.fill(Vec3::zeros());
         self.energy.fill(0.0);
         let (fibre_of, radius, stiffness) = (&self.fibre_of, &self.radius, &self.stiffness);
         let (force, energy) = (&mut self.force, &mut self.energy);
-        self.pairs.for_each_pair(&self.pos, |i, j, d| {
+        let keep =
+            |i: usize, j: usize| fibre_of[i] != fibre_of[j] && stiffness[i].min(stiffness[j]) > 0.0;
+        self.pairs.for_each_pair(&self.pos, keep, |i, j, d| {
             let k = stiffness[i].min(stiffness[j]);
-            if fibre_of[i] == fibre_of[j] || k == 0.0 {
-                return;
-            }
             let r = d.norm();
             let overlap = radius[i] + radius[j] - r;
             // Coincident centres have no line of centres: no force (as the self contact).

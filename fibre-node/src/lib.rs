@@ -26,6 +26,7 @@ pub mod fibre_contact;
 pub mod fibre_overlap;
 #[cfg(test)]
 mod gradient_check;
+pub mod near_pairs;
 pub mod quaternion;
 pub mod self_contact;
 pub mod self_overlap;
