@@ -1,9 +1,11 @@
 //! Time of one full fibre step (fibre-positions + fibre-velocities, including the bead-state
 //! publications on an in-process exchange), 3D, for both models at 10, 100 and 1000 beads.
 //! Throughput is reported per bead. Also the full check of the `self_overlap` diagnostic on a
-//! coil that overlaps itself (so that no check is skipped), 3D, 1000 and 100 000 beads. And
+//! coil that overlaps itself (so that no check is skipped), 3D, 1000 and 100 000 beads, with
+//! its pair list kept (the coil at rest) and rebuilt at every check (the coil shifted). And
 //! one step of a dry suspension of 10-bead fibres, 3D, 100 and 1000 fibres, with and without
-//! `fibre.N.fibre_contact` (the `fibre_overlap` diagnostic measured in both).
+//! `fibre.N.fibre_contact` (the `fibre_overlap` diagnostic measured in both). And the step
+//! of a 1000- and a 10 000-bead bead-spring fibre with `fibre.N.self_contact`.
 use cosim::{Component, InProcessExchange, Phase};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use fibre_node::quaternion::Vec3;
@@ -19,12 +21,14 @@ fn scene(model: &str, beads: usize, dt: f64) -> String {
     )
 }
 
-fn configured(model: &str, beads: usize) -> (FibreComponent, InProcessExchange) {
+fn configured(model: &str, beads: usize, extra: &str) -> (FibreComponent, InProcessExchange) {
     let mut c = FibreComponent::new();
     let mut x = InProcessExchange::new();
-    let cfg = c.configure(&scene(model, beads, 1e-9), &mut x).unwrap();
+    let cfg = c
+        .configure(&(scene(model, beads, 1e-9) + extra), &mut x)
+        .unwrap();
     let limit = cfg.time_step_limits[0].1;
-    c.configure(&scene(model, beads, 0.5 * limit), &mut x)
+    c.configure(&(scene(model, beads, 0.5 * limit) + extra), &mut x)
         .unwrap();
     (c, x)
 }
@@ -33,7 +37,7 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("fibre_step_3d");
     for model in ["cohesive-beam", "bead-spring"] {
         for beads in [10usize, 100, 1000] {
-            let (mut comp, mut x) = configured(model, beads);
+            let (mut comp, mut x) = configured(model, beads, "");
             let mut n = 0u64;
             group.throughput(Throughput::Elements(beads as u64));
             group.bench_with_input(BenchmarkId::new(model, beads), &beads, |b, _| {
@@ -76,6 +80,26 @@ fn dense_coil(beads: usize) -> Vec<Vec3> {
     pos
 }
 
+/// The step of `bench` for a bead-spring fibre with `self_contact`: the straight fibre
+/// bends without touching itself, so this is the cost of finding that no pair overlaps.
+fn bench_self_contact(c: &mut Criterion) {
+    let mut group = c.benchmark_group("self_contact_step_3d");
+    for beads in [1000usize, 10_000] {
+        let (mut comp, mut x) = configured("bead-spring", beads, "self_contact = true\n");
+        let mut n = 0u64;
+        group.throughput(Throughput::Elements(beads as u64));
+        group.bench_with_input(BenchmarkId::new("bead-spring", beads), &beads, |b, _| {
+            b.iter(|| {
+                comp.run_phase(n, Phase::FibrePositions, &mut x).unwrap();
+                let r = comp.run_phase(n, Phase::FibreVelocities, &mut x).unwrap();
+                n += 1;
+                std::hint::black_box(r)
+            })
+        });
+    }
+    group.finish();
+}
+
 fn bench_self_overlap(c: &mut Criterion) {
     let mut group = c.benchmark_group("self_overlap_full_check_3d");
     for beads in [1000usize, 100_000] {
@@ -83,8 +107,17 @@ fn bench_self_overlap(c: &mut Criterion) {
         let mut watch = SelfOverlap::new(beads, 1.0, 2.0, 3);
         assert!(watch.measure(&pos) > 0.0, "the coil must overlap itself");
         group.throughput(Throughput::Elements(beads as u64));
-        group.bench_with_input(BenchmarkId::from_parameter(beads), &beads, |b, _| {
+        group.bench_with_input(BenchmarkId::new("list-kept", beads), &beads, |b, _| {
             b.iter(|| std::hint::black_box(watch.measure(&pos)))
+        });
+        // The coil shifted back and forth by a radius: every check rebuilds the pair list.
+        let moved: Vec<Vec3> = pos.iter().map(|p| p + Vec3::new(1.0, 0.0, 0.0)).collect();
+        let mut flip = false;
+        group.bench_with_input(BenchmarkId::new("list-rebuilt", beads), &beads, |b, _| {
+            b.iter(|| {
+                flip = !flip;
+                std::hint::black_box(watch.measure(if flip { &moved } else { &pos }))
+            })
         });
     }
     group.finish();
@@ -142,5 +175,11 @@ fn bench_suspension(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench, bench_self_overlap, bench_suspension);
+criterion_group!(
+    benches,
+    bench,
+    bench_self_contact,
+    bench_self_overlap,
+    bench_suspension
+);
 criterion_main!(benches);

@@ -1,8 +1,8 @@
 //! Pairs of beads that may be close, across all fibres of a scene: a hashed cell list that
 //! knows the fluid's periodic box.
 //!
-//! Used by the `fibre_overlap` diagnostic ([`crate::fibre_overlap`]) and the contact between
-//! fibres ([`crate::fibre_contact`]). Every unordered pair `i < j` whose beads lie within
+//! Read through the Verlet list of [`crate::near_pairs`], which the contacts and the overlap
+//! diagnostics use. Every unordered pair `i < j` whose beads lie within
 //! `reach` of each other (minimum-image distance along the periodic axes) is visited exactly
 //! once, with further pairs visited or not as the cells fall; callers test the distance.
 //!
@@ -198,7 +198,7 @@ impl BeadPairs {
 /// A counting sort of the beads by bucket: on return `order[start[b]..start[b + 1]]` holds
 /// the beads of bucket `b` in increasing index order. `start` has one entry more than
 /// there are buckets; `order` one a bead.
-pub(crate) fn sort_into_buckets(bucket_of: &[u32], start: &mut [u32], order: &mut [u32]) {
+fn sort_into_buckets(bucket_of: &[u32], start: &mut [u32], order: &mut [u32]) {
     let buckets = start.len() - 1;
     start.fill(0);
     for &b in bucket_of {

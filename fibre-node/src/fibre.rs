@@ -283,10 +283,9 @@ impl Fibre {
             Model::CohesiveBeam(b) => b.axial,
             Model::BeadSpring(b) => b.k_s / (b.rest_length * b.rest_length),
         };
-        let self_contact = cfg.self_contact.then_some(SelfContact {
-            stiffness: contact_stiffness,
-            diameter: 2.0 * cfg.bead_radius,
-        });
+        let self_contact = cfg
+            .self_contact
+            .then(|| SelfContact::new(contact_stiffness, 2.0 * cfg.bead_radius, n, planar));
         let wall_contact = cfg.wall_contact.map(|faces| WallContact {
             stiffness: contact_stiffness,
             radius: cfg.bead_radius,
@@ -406,7 +405,7 @@ impl Fibre {
             }
             Model::BeadSpring(b) => b.add_chain_forces(&self.pos, &mut self.force),
         };
-        if let Some(c) = &self.self_contact {
+        if let Some(c) = &mut self.self_contact {
             self.energies.contact = c.add_forces(&self.pos, &mut self.force);
         }
         if let Some(c) = &self.wall_contact {

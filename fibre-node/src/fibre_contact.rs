@@ -82,7 +82,7 @@ impl FibreContact {
         }
     }
 
-    /// Forces and energies at `self.pos`, pairs in the Verlet list's order.
+    /// Forces and energies at `self.pos`, pairs in index order.
     fn evaluate(&mut self) {
         self.force.fill(Vec3::zeros());
         self.energy.fill(0.0);

@@ -9,9 +9,11 @@
 //! bead since the build stays below `skin` it is still at least `reach` apart. Every call
 //! then visits every admitted pair within `reach` exactly once, from the list.
 //!
-//! The list's order is the cell list's at the build, which depends on the positions alone:
-//! sums over the pairs are reproducible bit for bit. The list's buffer grows to the largest
-//! list seen and keeps that size; nothing else is allocated after [`NearPairs::new`].
+//! The list is kept sorted, pairs `(i, j)` with `i < j` in increasing order: a sum over the
+//! pairs within `reach` takes them in index order whatever the positions the list was built
+//! at, so it gives the same bits in a run resumed from a checkpoint (which builds its list
+//! afresh) as in the run it continues. The list's buffer grows to the largest list seen and
+//! keeps that size; nothing else is allocated after [`NearPairs::new`].
 use crate::bead_pairs::BeadPairs;
 use crate::quaternion::Vec3;
 
@@ -46,10 +48,11 @@ impl NearPairs {
         }
     }
 
-    /// Visit every pair `(i, j)` that `keep(i, j)` admits and whose beads lie within `reach`
-    /// of each other exactly once (and possibly some further apart), as `visit(i, j, X_i -
-    /// X_j)` with the minimum-image separation. `keep` must give the same answer for a pair
-    /// at every call (it is asked only when the list is built).
+    /// Visit every pair `(i, j)`, `i < j`, that `keep(i, j)` admits and whose beads lie
+    /// within `reach` of each other exactly once (and possibly some further apart), in
+    /// increasing order of `(i, j)`, as `visit(i, j, X_i - X_j)` with the minimum-image
+    /// separation. `keep` must give the same answer for a pair at every call (it is asked
+    /// only when the list is built).
     pub fn for_each_pair(
         &mut self,
         pos: &[Vec3],
@@ -87,10 +90,12 @@ impl NearPairs {
         let list = &mut self.list;
         list.clear();
         self.pairs.for_each_pair(pos, |i, j, d| {
+            let (i, j) = (i.min(j), i.max(j));
             if d.norm_squared() < cut2 && keep(i, j) {
                 list.push((i as u32, j as u32));
             }
         });
+        list.sort_unstable();
         self.built_at.copy_from_slice(pos);
         self.built = true;
         self.rebuilds += 1;
@@ -110,8 +115,8 @@ mod tests {
 
     /// Beads on random walks in a box periodic in x and z (3D) or x (2D), some walking
     /// fast: at every step the list visits exactly the admitted pairs within reach (each
-    /// once, with the separation the definition gives, bit for bit), and it is rebuilt far
-    /// less often than every step.
+    /// once, in index order, with the separation the definition gives, bit for bit), and it
+    /// is rebuilt far less often than every step.
     #[test]
     fn visits_every_admitted_pair_within_reach_while_the_beads_walk() {
         for dims in [2usize, 3] {
@@ -130,9 +135,12 @@ mod tests {
             let steps = 200;
             for step in 0..steps {
                 let mut seen = Vec::new();
+                let mut last = None;
                 near.for_each_pair(&pos, keep, |i, j, d| {
+                    assert!(i < j && last < Some((i, j)), "{last:?} then {:?}", (i, j));
+                    last = Some((i, j));
                     if d.norm() < reach {
-                        seen.push((i.min(j), i.max(j), d.norm().to_bits()));
+                        seen.push((i, j, d.norm().to_bits()));
                     }
                 });
                 let mut want = Vec::new();
@@ -144,8 +152,6 @@ mod tests {
                         }
                     }
                 }
-                seen.sort_unstable();
-                want.sort_unstable();
                 assert_eq!(seen, want, "dims {dims}, step {step}");
                 for (k, p) in pos.iter_mut().enumerate() {
                     let speed = if k % 7 == 0 { 0.1 } else { 0.02 };

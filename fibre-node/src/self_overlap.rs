@@ -13,8 +13,9 @@
 //! straight rest shape, `(j - i) l0`, is at least the diameter. Pairs that overlap at rest
 //! (a spacing `l0` below the radius) are left out: their overlap is the fibre's design.
 //!
-//! Cost. A full check visits the pairs through a hashed cell list with cells of
-//! `2 r_b + skin` (skin `2 r_b`), O(N); fibres of at most [`ALL_PAIRS_UP_TO`] beads visit every
+//! Cost. A full check visits the pairs within `2 r_b + skin` (skin `2 r_b`) of each other from
+//! a Verlet list ([`crate::near_pairs`], rebuilt from a cell list once a bead has moved an
+//! eighth of a diameter), O(N); fibres of at most [`ALL_PAIRS_UP_TO`] beads visit every
 //! pair. After a full check the fibre's clearance (the smallest gap `|X_i - X_j| - 2 r_b`
 //! over the pairs counted; at most the skin for the cell list, which does not see pairs
 //! further apart) bounds how far beads must move before any pair can touch: while twice the
@@ -23,13 +24,15 @@
 //! steps, a folded one every step. The value is a function of the positions alone (only a
 //! provably clear fibre is skipped, and it reports 0), whatever the history of checks: a
 //! resumed run reports the same bits as one never stopped.
+use crate::near_pairs::NearPairs;
 use crate::quaternion::Vec3;
 
 /// Fibres with at most this many beads visit all pairs in a full check.
 pub const ALL_PAIRS_UP_TO: usize = 32;
 
-/// The watch over one fibre: its geometry, the last full check and the cell list's buffers
-/// (all allocated in [`SelfOverlap::new`]; [`SelfOverlap::measure`] allocates nothing).
+/// The watch over one fibre: its geometry, the last full check and the pair list (allocated
+/// in [`SelfOverlap::new`]; [`SelfOverlap::measure`] allocates only when the list outgrows
+/// its buffer).
 #[derive(Debug, Clone)]
 pub struct SelfOverlap {
     /// Centre distance below which two beads overlap, `2 r_b` (length).
@@ -38,18 +41,13 @@ pub struct SelfOverlap {
     min_gap: usize,
     /// Cell size of the cell list, `diameter + skin` (length).
     cell: f64,
-    /// In 2D the beads share one z: the cell list is planar.
-    planar: bool,
     /// Positions at the last full check.
     reference: Vec<Vec3>,
     /// Clearance at the last full check (length; NaN before the first, negative while
     /// overlapping).
     margin: f64,
-    /// Cell-list buffers: each bead's bucket, bucket starts (a prefix sum) and the beads in
-    /// bucket order.
-    bucket_of: Vec<u32>,
-    start: Vec<u32>,
-    order: Vec<u32>,
+    /// The pairs within a cell of each other (None: all pairs are visited).
+    pairs: Option<NearPairs>,
 }
 
 impl SelfOverlap {
@@ -65,12 +63,6 @@ impl SelfOverlap {
         } else {
             usize::MAX
         };
-        let cells = beads > ALL_PAIRS_UP_TO;
-        let buckets = if cells {
-            (2 * beads).next_power_of_two()
-        } else {
-            0
-        };
         Self {
             diameter,
             min_gap,
@@ -78,12 +70,10 @@ impl SelfOverlap {
             // more pairs: in the fibre_step bench (a 1000-bead fibre bending fast) the
             // diagnostic costs 8.7 us a step with a skin of 2 r_b, 13.5 us with r_b.
             cell: 2.0 * diameter,
-            planar: dims == 2,
             reference: vec![Vec3::zeros(); beads],
             margin: f64::NAN,
-            bucket_of: vec![0; if cells { beads } else { 0 }],
-            start: vec![0; if cells { buckets + 1 } else { 0 }],
-            order: vec![0; if cells { beads } else { 0 }],
+            pairs: (beads > ALL_PAIRS_UP_TO)
+                .then(|| NearPairs::new(beads, 2.0 * diameter, 0.25 * diameter, [None; 3], dims)),
         }
     }
 
@@ -101,10 +91,10 @@ impl SelfOverlap {
                 return 0.0;
             }
         }
-        let clearance = if self.bucket_of.is_empty() {
+        let clearance = if self.pairs.is_none() {
             self.all_pairs(pos)
         } else {
-            self.cell_list(pos)
+            self.near_pairs(pos)
         };
         self.reference.copy_from_slice(pos);
         self.margin = clearance;
@@ -122,50 +112,17 @@ impl SelfOverlap {
         least
     }
 
-    fn cell_of(&self, p: &Vec3) -> [i64; 3] {
-        // `as` saturates (NaN to 0): a broken position still lands in some cell.
-        let c = |x: f64| (x / self.cell).floor() as i64;
-        [c(p.x), c(p.y), if self.planar { 0 } else { c(p.z) }]
-    }
-
-    fn bucket(&self, c: [i64; 3]) -> usize {
-        let h = (c[0] as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-            ^ (c[1] as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
-            ^ (c[2] as u64).wrapping_mul(0x1656_67B1_9E37_79F9);
-        // The high bits mix best; the table size is a power of two.
-        let buckets = self.start.len() - 1;
-        (h >> (64 - buckets.trailing_zeros())) as usize
-    }
-
-    /// As [`Self::all_pairs`] over the pairs in neighbouring cells; pairs further apart are
-    /// at least a cell apart, so the result is capped at the skin.
-    fn cell_list(&mut self, pos: &[Vec3]) -> f64 {
-        for (i, p) in pos.iter().enumerate() {
-            self.bucket_of[i] = self.bucket(self.cell_of(p)) as u32;
-        }
-        crate::bead_pairs::sort_into_buckets(
-            &self.bucket_of[..pos.len()],
-            &mut self.start,
-            &mut self.order,
-        );
-        let mut least = self.cell - self.diameter;
-        let dz: &[i64] = if self.planar { &[0] } else { &[-1, 0, 1] };
-        for (i, p) in pos.iter().enumerate() {
-            let c = self.cell_of(p);
-            for ox in -1..=1 {
-                for oy in -1..=1 {
-                    for &oz in dz {
-                        let b = self.bucket([c[0] + ox, c[1] + oy, c[2] + oz]);
-                        let (lo, hi) = (self.start[b] as usize, self.start[b + 1] as usize);
-                        for &j in &self.order[lo..hi] {
-                            let j = j as usize;
-                            if j >= i.saturating_add(self.min_gap) {
-                                least = least.min((p - pos[j]).norm() - self.diameter);
-                            }
-                        }
-                    }
-                }
-            }
+    /// As [`Self::all_pairs`] over the pairs within a cell of each other; pairs further
+    /// apart are at least a cell apart, so the result is capped at the skin.
+    fn near_pairs(&mut self, pos: &[Vec3]) -> f64 {
+        let (diameter, min_gap) = (self.diameter, self.min_gap);
+        let mut least = self.cell - diameter;
+        if let Some(pairs) = &mut self.pairs {
+            pairs.for_each_pair(
+                pos,
+                |i, j| j >= i.saturating_add(min_gap),
+                |_, _, d| least = least.min(d.norm() - diameter),
+            );
         }
         least
     }
