@@ -6,10 +6,11 @@
 //! one step of a dry suspension of 10-bead fibres, 3D, 100 and 1000 fibres, with and without
 //! `fibre.N.fibre_contact` (the `fibre_overlap` diagnostic measured in both). And the step
 //! of a 1000- and a 10 000-bead bead-spring fibre with `fibre.N.self_contact`.
-use cosim::{Component, InProcessExchange, Phase};
+use cosim::{Component, InProcessExchange, Phase, PhaseReport};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use fibre_node::quaternion::Vec3;
 use fibre_node::self_overlap::SelfOverlap;
+use fibre_node::xorshift::Xorshift;
 use fibre_node::FibreComponent;
 
 fn scene(model: &str, beads: usize, dt: f64) -> String {
@@ -33,6 +34,14 @@ fn configured(model: &str, beads: usize, extra: &str) -> (FibreComponent, InProc
     (c, x)
 }
 
+/// One fibre-node step (both fibre phases) of a component configured alone.
+fn one_step(comp: &mut FibreComponent, x: &mut InProcessExchange, n: &mut u64) -> PhaseReport {
+    comp.run_phase(*n, Phase::FibrePositions, x).unwrap();
+    let r = comp.run_phase(*n, Phase::FibreVelocities, x).unwrap();
+    *n += 1;
+    std::hint::black_box(r)
+}
+
 fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("fibre_step_3d");
     for model in ["cohesive-beam", "bead-spring"] {
@@ -41,12 +50,7 @@ fn bench(c: &mut Criterion) {
             let mut n = 0u64;
             group.throughput(Throughput::Elements(beads as u64));
             group.bench_with_input(BenchmarkId::new(model, beads), &beads, |b, _| {
-                b.iter(|| {
-                    comp.run_phase(n, Phase::FibrePositions, &mut x).unwrap();
-                    let r = comp.run_phase(n, Phase::FibreVelocities, &mut x).unwrap();
-                    n += 1;
-                    std::hint::black_box(r)
-                })
+                b.iter(|| one_step(&mut comp, &mut x, &mut n))
             });
         }
     }
@@ -57,13 +61,8 @@ fn bench(c: &mut Criterion) {
 /// volume in 8 of space, so that it crosses itself everywhere (xorshift, fixed seed).
 fn dense_coil(beads: usize) -> Vec<Vec3> {
     let side = 2.0 * (beads as f64 * 8.0).cbrt();
-    let mut seed = 0x2545_F491_4F6C_DD1D_u64;
-    let mut uniform = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut seed = Xorshift(0x2545_F491_4F6C_DD1D);
+    let mut uniform = move || seed.uniform() - 0.5;
     let mut pos = vec![Vec3::new(0.5 * side, 0.5 * side, 0.5 * side)];
     let mut dir = Vec3::new(1.0, 0.0, 0.0);
     for _ in 1..beads {
@@ -89,12 +88,7 @@ fn bench_self_contact(c: &mut Criterion) {
         let mut n = 0u64;
         group.throughput(Throughput::Elements(beads as u64));
         group.bench_with_input(BenchmarkId::new("bead-spring", beads), &beads, |b, _| {
-            b.iter(|| {
-                comp.run_phase(n, Phase::FibrePositions, &mut x).unwrap();
-                let r = comp.run_phase(n, Phase::FibreVelocities, &mut x).unwrap();
-                n += 1;
-                std::hint::black_box(r)
-            })
+            b.iter(|| one_step(&mut comp, &mut x, &mut n))
         });
     }
     group.finish();
@@ -129,13 +123,8 @@ fn bench_self_overlap(c: &mut Criterion) {
 fn suspension(fibres: usize, contact: bool) -> String {
     let beads = 10;
     let side = (fibres as f64 * beads as f64 * 4.19 / 0.05).cbrt();
-    let mut seed = 0x9E37_79B9_7F4A_7C15_u64;
-    let mut uniform = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut seed = Xorshift(0x9E37_79B9_7F4A_7C15);
+    let mut uniform = move || seed.uniform();
     let mut s = String::from("dimensions = 3\n[time]\ndt = 0.05\n");
     for _ in 0..fibres {
         let d = Vec3::new(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).normalize();
@@ -163,12 +152,7 @@ fn bench_suspension(c: &mut Criterion) {
             group.throughput(Throughput::Elements(10 * fibres as u64));
             let id = if contact { "contact" } else { "no-contact" };
             group.bench_with_input(BenchmarkId::new(id, fibres), &fibres, |b, _| {
-                b.iter(|| {
-                    comp.run_phase(n, Phase::FibrePositions, &mut x).unwrap();
-                    let r = comp.run_phase(n, Phase::FibreVelocities, &mut x).unwrap();
-                    n += 1;
-                    std::hint::black_box(r)
-                })
+                b.iter(|| one_step(&mut comp, &mut x, &mut n))
             });
         }
     }

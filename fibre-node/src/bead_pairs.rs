@@ -222,14 +222,7 @@ fn sort_into_buckets(bucket_of: &[u32], start: &mut [u32], order: &mut [u32]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A deterministic pseudo-random sequence in [0, 1) (xorshift).
-    fn uniform(seed: &mut u64) -> f64 {
-        *seed ^= *seed << 13;
-        *seed ^= *seed >> 7;
-        *seed ^= *seed << 17;
-        (*seed >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use crate::xorshift::Xorshift;
 
     /// Pairs `(i, j, bits of X_i - X_j)`.
     type Pairs = Vec<(usize, usize, [u64; 3])>;
@@ -270,7 +263,7 @@ mod tests {
     /// exactly the pairs all pairs find, each once, with the same separations.
     #[test]
     fn finds_every_close_pair_once_across_the_periodic_seams() {
-        let mut seed = 0x2545_F491_4F6C_DD1D_u64;
+        let mut seed = Xorshift(0x2545_F491_4F6C_DD1D);
         let mut cases = 0;
         for dims in [2usize, 3] {
             for periodic in [
@@ -282,10 +275,10 @@ mod tests {
                     let period: [Option<f64>; 3] =
                         std::array::from_fn(|a| periodic[a].then_some(side));
                     for _ in 0..10 {
-                        let n = 60 + (uniform(&mut seed) * 140.0) as usize;
+                        let n = 60 + (seed.uniform() * 140.0) as usize;
                         let pos: Vec<Vec3> = (0..n)
                             .map(|_| {
-                                let mut c = || (uniform(&mut seed) * 1.5 - 0.25) * side;
+                                let mut c = || (seed.uniform() * 1.5 - 0.25) * side;
                                 let (x, y, z) = (c(), c(), c());
                                 Vec3::new(x, y, if dims == 3 { z } else { 0.0 })
                             })

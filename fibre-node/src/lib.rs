@@ -33,6 +33,7 @@ pub mod self_overlap;
 pub mod spm_exchange;
 pub mod stability;
 pub mod wall_contact;
+pub mod xorshift;
 
 pub use component::{FibreComponent, DIAGNOSTICS};
 pub use config::{parse_scene, Coupling, FibreConfig, ModelKind, SceneConfig};

@@ -105,13 +105,7 @@ impl NearPairs {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn uniform(seed: &mut u64) -> f64 {
-        *seed ^= *seed << 13;
-        *seed ^= *seed >> 7;
-        *seed ^= *seed << 17;
-        (*seed >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use crate::xorshift::Xorshift;
 
     /// Beads on random walks in a box periodic in x and z (3D) or x (2D), some walking
     /// fast: at every step the list visits exactly the admitted pairs within reach (each
@@ -122,11 +116,11 @@ mod tests {
         for dims in [2usize, 3] {
             let (beads, side, reach, skin) = (300, 30.0, 2.0, 0.5);
             let period = [Some(side), None, if dims == 3 { Some(side) } else { None }];
-            let mut seed = 0x2545_F491_4F6C_DD1D_u64;
+            let mut seed = Xorshift(0x2545_F491_4F6C_DD1D);
             let mut pos: Vec<Vec3> = (0..beads)
                 .map(|_| {
-                    let z = if dims == 3 { uniform(&mut seed) } else { 0.0 };
-                    Vec3::new(uniform(&mut seed), uniform(&mut seed), z) * side
+                    let z = if dims == 3 { seed.uniform() } else { 0.0 };
+                    Vec3::new(seed.uniform(), seed.uniform(), z) * side
                 })
                 .collect();
             let keep = |i: usize, j: usize| (i / 5) != (j / 5);
@@ -155,12 +149,8 @@ mod tests {
                 assert_eq!(seen, want, "dims {dims}, step {step}");
                 for (k, p) in pos.iter_mut().enumerate() {
                     let speed = if k % 7 == 0 { 0.1 } else { 0.02 };
-                    let z = if dims == 3 {
-                        uniform(&mut seed) - 0.5
-                    } else {
-                        0.0
-                    };
-                    *p += Vec3::new(uniform(&mut seed) - 0.5, uniform(&mut seed) - 0.5, z) * speed;
+                    let z = if dims == 3 { seed.uniform() - 0.5 } else { 0.0 };
+                    *p += Vec3::new(seed.uniform() - 0.5, seed.uniform() - 0.5, z) * speed;
                 }
             }
             let rebuilds = near.rebuilds();

@@ -76,6 +76,7 @@ impl SelfContact {
 mod tests {
     use super::*;
     use crate::gradient_check::assert_force_is_minus_the_gradient;
+    use crate::xorshift::Xorshift;
 
     fn contact(beads: usize) -> SelfContact {
         SelfContact::new(2.5, 2.0, beads, false)
@@ -152,13 +153,8 @@ mod tests {
     /// pairs, bit for bit, every step, while the list is rebuilt only now and then.
     #[test]
     fn the_pair_list_gives_the_bits_of_all_pairs_on_a_moving_coil() {
-        let mut seed = 0x9E37_79B9_7F4A_7C15_u64;
-        let mut uniform = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut seed = Xorshift(0x9E37_79B9_7F4A_7C15);
+        let mut uniform = move || seed.uniform() - 0.5;
         let mut pos = vec![Vec3::zeros()];
         for _ in 1..400 {
             let step = Vec3::new(uniform(), uniform(), uniform()).normalize() * 2.0;

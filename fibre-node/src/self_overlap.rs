@@ -131,18 +131,11 @@ impl SelfOverlap {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A deterministic pseudo-random sequence in [0, 1) (xorshift).
-    fn uniform(seed: &mut u64) -> f64 {
-        *seed ^= *seed << 13;
-        *seed ^= *seed >> 7;
-        *seed ^= *seed << 17;
-        (*seed >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use crate::xorshift::Xorshift;
 
     /// A chain of touching beads (spacing = diameter) whose bond directions wander, kept in
     /// a box of `side` by reflection: a random walk that crosses itself in a small box.
-    fn coil(beads: usize, radius: f64, side: f64, planar: bool, seed: &mut u64) -> Vec<Vec3> {
+    fn coil(beads: usize, radius: f64, side: f64, planar: bool, seed: &mut Xorshift) -> Vec<Vec3> {
         let mut pos = vec![Vec3::new(
             0.5 * side,
             0.5 * side,
@@ -150,9 +143,9 @@ mod tests {
         )];
         let mut dir = Vec3::new(1.0, 0.0, 0.0);
         for _ in 1..beads {
-            let mut kick = Vec3::new(uniform(seed) - 0.5, uniform(seed) - 0.5, 0.0);
+            let mut kick = Vec3::new(seed.uniform() - 0.5, seed.uniform() - 0.5, 0.0);
             if !planar {
-                kick.z = uniform(seed) - 0.5;
+                kick.z = seed.uniform() - 0.5;
             }
             dir = (dir + kick).normalize();
             let mut next = *pos.last().unwrap() + dir * (2.0 * radius);
@@ -216,7 +209,7 @@ mod tests {
         // radii) and loose (a hundred), moved in small random steps so that some steps are
         // skipped and others checked; every step must give the bits of a fresh watch and the
         // value of the definition.
-        let mut seed = 0x2545_F491_4F6C_DD1D_u64;
+        let mut seed = Xorshift(0x2545_F491_4F6C_DD1D);
         let mut skipped = 0;
         let cases = [(200, 10.0), (20, 10.0), (200, 100.0), (20, 100.0)];
         for ((beads, side), planar) in cases.into_iter().flat_map(|c| [(c, false), (c, true)]) {
@@ -252,10 +245,10 @@ mod tests {
                     overlapping += 1;
                 }
                 for p in pos.iter_mut() {
-                    p.x += 0.02 * (uniform(&mut seed) - 0.5);
-                    p.y += 0.02 * (uniform(&mut seed) - 0.5);
+                    p.x += 0.02 * (seed.uniform() - 0.5);
+                    p.y += 0.02 * (seed.uniform() - 0.5);
                     if !planar {
-                        p.z += 0.02 * (uniform(&mut seed) - 0.5);
+                        p.z += 0.02 * (seed.uniform() - 0.5);
                     }
                 }
             }
@@ -273,7 +266,7 @@ mod tests {
         // Beads strewn at random (a fibre cut into pieces), so dense that their closest pair
         // is usually within the skin of touching, in a random direction: 200 scatterings per
         // dimension, each checked against all pairs.
-        let mut seed = 0x9E37_79B9_7F4A_7C15_u64;
+        let mut seed = Xorshift(0x9E37_79B9_7F4A_7C15);
         let (r, beads) = (1.0, 64);
         for (dims, side) in [(3, 40.0), (2, 200.0)] {
             let mut within_skin = 0;
@@ -281,15 +274,11 @@ mod tests {
                 let pos: Vec<Vec3> = (0..beads)
                     .map(|_| {
                         let z = if dims == 3 {
-                            side * uniform(&mut seed)
+                            side * seed.uniform()
                         } else {
                             0.0
                         };
-                        Vec3::new(
-                            side * uniform(&mut seed) - 7.0,
-                            side * uniform(&mut seed),
-                            z,
-                        )
+                        Vec3::new(side * seed.uniform() - 7.0, side * seed.uniform(), z)
                     })
                     .collect();
                 let mut w = SelfOverlap::new(beads, r, 2.0 * r, dims);

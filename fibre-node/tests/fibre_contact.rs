@@ -2,21 +2,8 @@
 //! lockstep of the fibres keeps and changes.
 use cosim::{Component, InProcessExchange, Phase, PhaseReport};
 use fibre_node::FibreComponent;
-
-fn configured(scene: &str) -> (FibreComponent, InProcessExchange) {
-    let mut c = FibreComponent::new();
-    let mut x = InProcessExchange::new();
-    c.configure(scene, &mut x).unwrap_or_else(|e| panic!("{e}"));
-    (c, x)
-}
-
-fn configure_error(scene: &str) -> String {
-    let mut x = InProcessExchange::new();
-    match FibreComponent::new().configure(scene, &mut x) {
-        Ok(_) => panic!("configure accepted a scene it should refuse"),
-        Err(e) => e.to_string(),
-    }
-}
+mod common;
+use common::{configure_error, configured};
 
 fn step(c: &mut FibreComponent, x: &mut InProcessExchange, n: u64) -> PhaseReport {
     c.run_phase(n, Phase::FibrePositions, x).unwrap();

@@ -1,6 +1,8 @@
 //! The fibre node's side of the FPD coupling (S2023 section II C): forces out, velocities in.
-use cosim::{BeadState, Component, Exchange, InProcessExchange, Phase, Port};
+use cosim::{BeadState, Component, Exchange, Phase, Port};
 use fibre_node::FibreComponent;
+mod common;
+use common::{configure_error, configured};
 
 /// A bent 2D bead-spring fibre under FPD: 4 beads, the third displaced off the line so
 /// that stretching and bending both act, and a point load on the last bead.
@@ -21,21 +23,6 @@ start = [10.0, 10.0, 0.0]
 direction = [1.0, 0.0, 0.0]
 loads = [{ bead = -1, force = [0.0, 0.25, 0.0] }]
 "#;
-
-fn configured(scene: &str) -> (FibreComponent, InProcessExchange) {
-    let mut c = FibreComponent::new();
-    let mut x = InProcessExchange::new();
-    c.configure(scene, &mut x).unwrap_or_else(|e| panic!("{e}"));
-    (c, x)
-}
-
-fn configure_error(scene: &str) -> String {
-    let mut x = InProcessExchange::new();
-    match FibreComponent::new().configure(scene, &mut x) {
-        Ok(_) => panic!("configure accepted a scene it should refuse"),
-        Err(e) => e.to_string(),
-    }
-}
 
 /// Elastic energy of the chain as the bead-spring model defines it (S2023 eq. 9 in the
 /// linear bending form the code implements, REFERENCE.md section 1): the reference the
