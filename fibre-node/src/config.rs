@@ -90,9 +90,11 @@ pub struct FibreConfig {
     /// velocity in the bead's profile, taken implicitly (see `crate::fibre`); `"explicit"`
     /// (default): the fluid's impulse is added as it comes (L2020 eqs. 35-36).
     pub implicit_exchange: bool,
-    /// Bead-spring under SPM, 2D: `bead_spin = "chord"` turns each bead with its chord (the
+    /// Bead-spring under SPM: `bead_spin = "chord"` turns each bead with its chord (the
     /// fluid's torque on a bead passed to its neighbours as a couple, `crate::fibre`), as in
-    /// a solid fibre; `"free"` (default): each bead spins freely with the fluid.
+    /// a solid fibre; in 3D each bead keeps a free spin about the chain's tangent, which
+    /// bonds without torsion cannot hold. `"free"` (default): each bead spins freely with
+    /// the fluid.
     pub spin_with_chord: bool,
 }
 
@@ -344,9 +346,9 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
                  exchanges momentum with the beads; remove the key"
             ));
         }
-        if f.spin_with_chord && (coupling != Coupling::Spm || dimensions != 2) {
+        if f.spin_with_chord && coupling != Coupling::Spm {
             return Err(format!(
-                "fibre.{n}.bead_spin = \"chord\": read for a 2D scene with the SPM fluid \
+                "fibre.{n}.bead_spin = \"chord\": read for a scene with the SPM fluid \
                  (fluid.method = \"spm\"), where a bead's spin is otherwise its own; use \
                  \"free\" or remove the key"
             ));
@@ -910,8 +912,8 @@ youngs_modulus = 1.0
         assert!((kb - 2.64).abs() < 1e-12, "{kb}");
     }
 
-    /// `bead_spin = "chord"` is read for a 2D bead-spring fibre under SPM, with either
-    /// exchange, and refused elsewhere with the reason.
+    /// `bead_spin = "chord"` is read for a bead-spring fibre under SPM, 2D or 3D, with
+    /// either exchange, and refused elsewhere with the reason.
     #[test]
     fn bead_spin_chord_is_read_where_a_beads_spin_is_its_own() {
         let spm = FPD_SHEAR.replace("\"fpd-lbm\"", "\"spm\"");
@@ -923,14 +925,13 @@ youngs_modulus = 1.0
         ))
         .unwrap();
         assert!(implicit.fibres[0].spin_with_chord && implicit.fibres[0].implicit_exchange);
+        let spm_3d = spm
+            .replace("dimensions = 2", "dimensions = 3")
+            .replace("[200, 160]", "[200, 160, 16]");
+        let s = parse_scene(&format!("{spm_3d}bead_spin = \"chord\"\n")).unwrap();
+        assert!(s.fibres[0].spin_with_chord);
         for (scene, why) in [
             (format!("{FPD_SHEAR}bead_spin = \"chord\"\n"), "SPM fluid"),
-            (
-                spm.replace("dimensions = 2", "dimensions = 3")
-                    .replace("[200, 160]", "[200, 160, 16]")
-                    + "bead_spin = \"chord\"\n",
-                "2D",
-            ),
             (
                 format!("{spm}bead_spin = \"rolling\"\n"),
                 "expected \"free\" or \"chord\"",

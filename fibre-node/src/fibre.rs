@@ -154,8 +154,8 @@ pub struct Fibre {
     pub held_displacement: Vec<Vec3>,
     /// Scratch for the internal damping (allocated only when it is on).
     probe: Option<Box<DampingProbe>>,
-    /// `fibre.N.bead_spin = "chord"` (bead-spring under SPM, 2D): each bead turns with its
-    /// chord instead of spinning freely, the angular impulses it takes passed to its
+    /// `fibre.N.bead_spin = "chord"` (bead-spring under SPM): each bead turns with its
+    /// chord instead of spinning freely (in 3D, keeping a free spin about its tangent), the angular impulses it takes passed to its
     /// neighbours as couples (`Fibre::pass_torques_to_neighbours`).
     pub spin_with_chord: bool,
     /// Scratch: the linear impulses those couples give each bead (empty unless
@@ -166,6 +166,11 @@ pub struct Fibre {
     /// drag, and the spin of the fluid in its profile (empty unless `spin_with_chord`).
     chord_base: Vec<Vec3>,
     chord_spin: Vec<Vec3>,
+    /// Scratch for `spin_with_chord`: the part of each bead's angular impulse left to its
+    /// spin about its tangent, and (implicit exchange) that spin before the kick (empty
+    /// unless `spin_with_chord`).
+    chord_axial: Vec<f64>,
+    chord_axial_start: Vec<f64>,
 }
 
 /// Scratch for the directional derivative of the internal forces along the velocities.
@@ -354,6 +359,8 @@ impl Fibre {
             couple: chord_scratch(),
             chord_base: chord_scratch(),
             chord_spin: chord_scratch(),
+            chord_axial: vec![0.0; if spin_with_chord { n } else { 0 }],
+            chord_axial_start: vec![0.0; if spin_with_chord { n } else { 0 }],
             probe: if cfg.internal_damping > 0.0 {
                 Some(Box::new(DampingProbe::new(n)))
             } else {
@@ -565,6 +572,16 @@ impl Fibre {
             }
             if self.spin_with_chord && !implicit_chord {
                 nv += self.couple[k] * inv_m;
+            }
+            if self.spin_with_chord && !self.planar {
+                // What a chord-locked bead keeps of its own is the spin about its tangent:
+                // damped, and given what its bonds cannot carry (the implicit exchange
+                // solves for it in `lock_spins_implicitly`). The turn with the bonds is set
+                // after the loop.
+                nw = w - (h * c) * w;
+                if !implicit_chord {
+                    nw += (self.chord_axial[k] * inv_i) * chord_spin::tangent(&self.pos, k);
+                }
             }
             if self.planar {
                 nv.z = 0.0;
