@@ -440,6 +440,9 @@ fn wall_contact_keeps_a_bead_out_of_the_wall_slab() {
 /// periods in 2D (18.340 against 18.327). Measured 14.77 (-5.4 %): at r_b = 4 the 3D SPM
 /// chains turn faster than the Stokes chain (-9.2 % for three beads, -5.1 % at r_b = 6;
 /// spm.md, "Jeffery orbit in 3D"). Tolerance 10 %, the for the Jeffery periods.
+/// The same pair as a bead-spring chain with `bead_spin = "chord"` (beads turned with their
+/// bond) must tumble as the beam does: measured 14.760 against 14.766, tolerance 1 %. (With
+/// free spins the pair rolls and tumbles in 23.1, +48 %: spm.md.)
 #[test]
 fn jeffery_period_of_a_two_sphere_chain_against_3d_stokes() {
     let o = [
@@ -456,6 +459,21 @@ fn jeffery_period_of_a_two_sphere_chain_against_3d_stokes() {
     let t = jeffery_period("spm/jeffery_rigid_3d.toml", &o, "spm-jeffery-3d-2", stokes);
     println!("3D, N_b = 2: gamma T = {t:.4}, 3D Stokes {stokes:.4}");
     assert!((t / stokes - 1.0).abs() < 0.10, "gamma T {t} vs {stokes}");
+    let chord = [
+        &o[..],
+        &[
+            "fibre.0.model=\"bead-spring\"",
+            "fibre.0.bead_spin=\"chord\"",
+        ],
+    ]
+    .concat();
+    let name = "spm-jeffery-3d-2-chord";
+    let c = jeffery_period("spm/jeffery_rigid_3d.toml", &chord, name, stokes);
+    println!("3D, N_b = 2, bead-spring turned with its chord: gamma T = {c:.4}");
+    assert!(
+        (c / t - 1.0).abs() < 0.01,
+        "chord-locked gamma T {c} vs the beam's {t}"
+    );
 }
 
 /// `tumbling_period_gamma` of `cfg` with the overrides `o`, in-process, after checking that
