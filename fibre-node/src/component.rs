@@ -296,7 +296,7 @@ impl Component for FibreComponent {
                 param("fibre.N.affinity", "1", Some("0.0"), "wetting affinity psi0 of the fibre (read by the fluid node)"),
                 param("fibre.N.bending_number", "1", Some("none"), "bead-spring in a wall shear (fpd-lbm or spm): bending number K = 2 k_b / (eta_f gamma l_c^2) (S2023 eq. 18; 0: freely jointed), converted to k_b with fluid.viscosity, the wall shear gamma = (top - bottom) / H (H = ny under fpd-lbm, ny - 2 T between the spm slabs) and l_c = N d; excludes bending_stiffness; reported for every bead-spring fibre in a wall shear"),
                 param("fibre.N.stretch_number", "1", Some("none"), "bead-spring in a wall shear (fpd-lbm or spm): stretch number K_s = k_s / (eta_f V0 l0) (S2023 section II C), converted to k_s with fluid.viscosity, the wall speed V0 = |top - bottom| / 2 and l0 = spacing; excludes stretch_stiffness; reported for every bead-spring fibre in a wall shear"),
-                param("fibre.N.bead_spin", "1", Some("\"free\""), "bead-spring under spm, 2D: \"free\" (each bead spins with the fluid, a train of rollers) or \"chord\" (each bead turns with its bonds, the fluid's torque on it passed to its neighbours as couples: a solid fibre)"),
+                param("fibre.N.bead_spin", "1", Some("\"free\""), "bead-spring under spm: \"free\" (each bead spins with the fluid, a train of rollers) or \"chord\" (each bead turns with its bonds, the fluid's torque on it passed to its neighbours as couples: a solid fibre; in 3D each bead keeps a free spin about the chain's tangent)"),
                 param("fibre.N.exchange", "1", Some("\"explicit\""), "SPM momentum exchange: \"explicit\" (the fluid's impulse added as it comes, L2020 eqs. 35-36; beads must be at least half as heavy as their profile's fluid) or \"implicit\" (the same impulse taken as a drag towards the profile's fluid velocity at the new bead velocity: momentum-conserving with the penalty, stable for light beads and stiff fibres; with one sub-step it moves a bead as the explicit exchange moves a bead of mass M + m_phi, the profile's fluid added to its inertia)"),
                 param("fibre.N.bead_inertia", "1", Some("\"solid\""), "bead moment of inertia: \"solid\" (sharp disc or sphere, as fibre.N.density says) or \"profile\" (density times the moment of the bead's smoothed profile, SPM only); under SPM a bead whose profile fluid has 2 or more times its mass or moment of inertia is refused (explicit exchange limit)"),
                 param("fibre.N.beam_forces", "1", Some("\"paper\""), "cohesive beam: \"paper\" (L2020 eqs. 11-24) or \"energy-consistent\" (the same to leading order, exactly conservative to third order in the bead angles)"),
@@ -565,7 +565,7 @@ impl Component for FibreComponent {
                          vertical, and it sticks where the cohesive beam tumbles; \
                          docs/validation/spm.md). For a solid fibre, use \
                          fibre.{n}.model = \"cohesive-beam\", or fibre.{n}.bead_spin = \
-                         \"chord\" (2D)"
+                         \"chord\""
                     ));
                 }
             }
