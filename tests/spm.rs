@@ -499,16 +499,16 @@ fn a_tilted_chord_locked_pair_spins_about_its_bond_as_jeffery_and_the_beam_say()
         "time.steps=600",
         "output.interval=100",
     ];
-    // Shear rate of the walls' Couette flow: wall speeds over the gap between the slabs.
-    let gamma = 0.4375 / (64.0 - 2.0 * 4.0);
     let cfg = config("spm/jeffery_rigid_3d.toml");
     let run = |extra: &[&str], name: &str| {
         let o: Vec<String> = o.iter().chain(extra).map(|s| s.to_string()).collect();
-        run_in_process(&cfg, &o, name);
-        read_topic(&run_dir(name).join("run.mcap"), "/fibre/bead_states").unwrap()
+        let summary = run_in_process(&cfg, &o, name);
+        let states = read_topic(&run_dir(name).join("run.mcap"), "/fibre/bead_states");
+        (summary, states.unwrap())
     };
-    let beam = run(&[], "spm-tilted-pair-beam");
-    let chord = run(
+    let (summary, beam) = run(&[], "spm-tilted-pair-beam");
+    let gamma = summary["derived"]["fluid.shear_rate"].as_f64().unwrap();
+    let (_, chord) = run(
         &[
             "fibre.0.model=\"bead-spring\"",
             "fibre.0.bead_spin=\"chord\"",
