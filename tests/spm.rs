@@ -488,12 +488,46 @@ fn jeffery_period_of_a_two_sphere_chain_against_3d_stokes() {
 /// step 100 and turn towards the flow).
 #[test]
 fn a_tilted_chord_locked_pair_spins_about_its_bond_as_jeffery_and_the_beam_say() {
+    tilted_chord_chain_against_jeffery_and_the_beam(2, "[24.0,28.0,20.0]", "spm-tilted-pair", 2e-3);
+}
+
+/// The same with three beads, so that the middle one is interior: `fibre/chord_spin.rs`
+/// splits its angular impulse between its two bonds, half each, and turns it at the mean rate
+/// of both (at an end, all to the one bond); the chain stays straight, so both rates agree
+/// and what this checks is the split. Same references and tolerances, except direction
+/// within 3e-3 of the beam's (measured 1.2e-3, largest at step 100). Measured over 600 steps:
+/// omega . p within 0.0026 gamma of Jeffery's (the middle bead; the ends within 0.0022), bead
+/// angular velocities within 2.3e-3 gamma of the beam's. A middle bead that passed all of its
+/// angular impulse to each bond (w = 1) fails at step 100 (direction 0.011 off the beam's).
+#[test]
+fn a_tilted_chord_locked_three_bead_chain_spins_about_its_axis_as_jeffery_and_the_beam_say() {
+    tilted_chord_chain_against_jeffery_and_the_beam(
+        3,
+        "[24.0,26.0,18.0]",
+        "spm-tilted-three",
+        3e-3,
+    );
+}
+
+/// A chain of `beads` tilted 45 degrees from the shear plane towards the vorticity, bead 0 at
+/// `start` (midpoint near the centre of the gap), run as a cohesive beam and as a chord-locked
+/// bead-spring chain (runs `{name}-beam`, `{name}-chord`): every bead's spin about the chain's
+/// axis against Jeffery's, and each bead's angular velocity and the axis against the beam's
+/// (`turn`: largest component of the difference in direction allowed).
+fn tilted_chord_chain_against_jeffery_and_the_beam(
+    beads: usize,
+    start: &str,
+    name: &str,
+    turn: f64,
+) {
+    let beads_key = format!("fibre.0.beads={beads}");
+    let start_key = format!("fibre.0.start={start}");
     let o = [
-        "fibre.0.beads=2",
+        beads_key.as_str(),
         "fluid.grid=[48,64,48]",
         "walls.velocity=[-0.21875,0.21875]",
         "fibre.0.youngs_modulus=93.3",
-        "fibre.0.start=[24.0,28.0,20.0]",
+        start_key.as_str(),
         "fibre.0.direction=[0.0,0.70710678,0.70710678]",
         "fibre.0.exchange=\"implicit\"",
         "time.steps=600",
@@ -506,14 +540,14 @@ fn a_tilted_chord_locked_pair_spins_about_its_bond_as_jeffery_and_the_beam_say()
         let states = read_topic(&run_dir(name).join("run.mcap"), "/fibre/bead_states");
         (summary, states.unwrap())
     };
-    let (summary, beam) = run(&[], "spm-tilted-pair-beam");
+    let (summary, beam) = run(&[], &format!("{name}-beam"));
     let gamma = summary["derived"]["fluid.shear_rate"].as_f64().unwrap();
     let (_, chord) = run(
         &[
             "fibre.0.model=\"bead-spring\"",
             "fibre.0.bead_spin=\"chord\"",
         ],
-        "spm-tilted-pair-chord",
+        &format!("{name}-chord"),
     );
     assert_eq!(beam.len(), 7);
     assert_eq!(chord.len(), 7);
@@ -522,7 +556,7 @@ fn a_tilted_chord_locked_pair_spins_about_its_bond_as_jeffery_and_the_beam_say()
         r.iter().map(|v| v.as_f64().unwrap()).collect()
     };
     let axis = |m: &serde_json::Value| -> [f64; 3] {
-        let (a, b) = (row(m, 0), row(m, 1));
+        let (a, b) = (row(m, 0), row(m, beads - 1));
         let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
         let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         [d[0] / n, d[1] / n, d[2] / n]
@@ -530,12 +564,12 @@ fn a_tilted_chord_locked_pair_spins_about_its_bond_as_jeffery_and_the_beam_say()
     for (mb, mc) in beam.iter().zip(&chord).skip(1) {
         let step = mc["step"].as_u64().unwrap();
         let (pb, pc) = (axis(mb), axis(mc));
-        let turn = (0..3).map(|k| (pb[k] - pc[k]).abs()).fold(0.0, f64::max);
+        let off = (0..3).map(|k| (pb[k] - pc[k]).abs()).fold(0.0, f64::max);
         assert!(
-            turn < 2e-3,
+            off < turn,
             "step {step}: direction {pc:?}, the beam's {pb:?}"
         );
-        for bead in 0..2 {
+        for bead in 0..beads {
             let (wb, wc) = (&row(mb, bead)[10..13], &row(mc, bead)[10..13]);
             let spin: f64 = (0..3).map(|k| wc[k] * pc[k]).sum();
             let jeffery = -0.5 * gamma * pc[2];
