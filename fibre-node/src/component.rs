@@ -5,9 +5,9 @@ use crate::fibre_contact::FibreContact;
 use crate::fibre_overlap::FibreOverlap;
 use crate::quaternion::{from_array, to_array, Vec3};
 use crate::self_overlap::SelfOverlap;
-use crate::spm_exchange;
 use crate::stability::{fpd_margin, fpd_stiffness_limit, stability_limit, SAFETY};
 use crate::wall_contact::overlaps;
+use crate::{spm_exchange, spm_exchange_stiffness};
 use cosim::description::{parameter as param, ModelDescription, PortDescription};
 use cosim::profile::DEFAULT_FPD_INTERFACE_RATIO;
 use cosim::{
@@ -472,6 +472,16 @@ impl Component for FibreComponent {
             }
             if !fpd && lim.dt_limit.is_finite() {
                 limits.push((format!("beam stiffness (fibre.{n})"), lim.dt_limit));
+            }
+            // A mode the once-per-step impulse feeds (spm_exchange_stiffness.rs).
+            if let (Some(r), false, true) = (exchange, cfg.clamp.len() == cfg.beads, explicit) {
+                let p = format!("fibre.{n}");
+                let x = spm_exchange_stiffness::check(&p, &f, lim.omega_max, r, scene.dt)
+                    .map_err(ComponentError)?;
+                if let Some(dt_limit) = x.limit() {
+                    limits.push((format!("explicit exchange stiffness ({p})"), dt_limit));
+                }
+                notes.extend(x.note(&p));
             }
             let p = format!("fibre.{n}");
             derived.push((format!("{p}.length"), cfg.spacing * (cfg.beads - 1) as f64));

@@ -31,6 +31,7 @@ pub mod quaternion;
 pub mod self_contact;
 pub mod self_overlap;
 pub mod spm_exchange;
+pub mod spm_exchange_stiffness;
 pub mod stability;
 pub mod wall_contact;
 pub mod xorshift;

@@ -194,7 +194,12 @@ pub fn max_eigenvalue(fibre: &Fibre, iterations: usize) -> (f64, usize) {
 /// eigenvalue (Cauchy interlacing), while the top of a uniform chain's spectrum converges to
 /// the infinite chain's as 1/N².
 pub fn representative(fibre: &Fibre) -> std::borrow::Cow<'_, Fibre> {
-    let n = MAX_ESTIMATE_BEADS;
+    first_beads(fibre, MAX_ESTIMATE_BEADS)
+}
+
+/// The fibre itself if it has at most `n` beads, else its first `n` beads with no clamps and
+/// no loads.
+fn first_beads(fibre: &Fibre, n: usize) -> std::borrow::Cow<'_, Fibre> {
     if fibre.len() <= n {
         return std::borrow::Cow::Borrowed(fibre);
     }
@@ -208,6 +213,86 @@ pub fn representative(fibre: &Fibre) -> std::borrow::Cow<'_, Fibre> {
     f.clamped = vec![false; n];
     f.loads.clear();
     std::borrow::Cow::Owned(f)
+}
+
+/// Longest chain [`normal_modes`] decomposes (a dense eigenproblem of up to 6 x 32 unknowns).
+pub const MAX_MODE_BEADS: usize = 32;
+
+/// One normal mode of the linearised internal dynamics `M ü = −K u`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NormalMode {
+    /// Angular frequency `ω`.
+    pub omega: f64,
+    /// Share of the mode's kinetic energy in the beads' translation (the rest is in their
+    /// rotation): 1 for a bead-spring chain, between 0 and 1 for a cohesive beam.
+    pub translation: f64,
+}
+
+/// Dense `M^{-1/2} K M^{-1/2}` of the fibre's free coordinates, by central finite differences
+/// of the force/torque function (symmetric up to the differencing error); and the coordinates.
+fn mass_weighted_stiffness(fibre: &Fibre) -> (nalgebra::DMatrix<f64>, Vec<Dof>) {
+    let dofs = dofs_of(fibre);
+    let n = dofs.len();
+    let mut work = fibre.clone();
+    let mut a = nalgebra::DMatrix::zeros(n, n);
+    let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
+    let w: Vec<f64> = dofs
+        .iter()
+        .map(|d| {
+            1.0 / if d.rotation {
+                fibre.inertia
+            } else {
+                fibre.mass
+            }
+            .sqrt()
+        })
+        .collect();
+    let s = fibre.rest_length() * 1e-6;
+    let mut u = vec![0.0; n];
+    for c in 0..n {
+        u.iter_mut().for_each(|x| *x = 0.0);
+        u[c] = 1.0;
+        forces_at(&mut work, fibre, &dofs, &u, s, &mut fp);
+        forces_at(&mut work, fibre, &dofs, &u, -s, &mut fm);
+        for r in 0..n {
+            a[(r, c)] = -(fp[r] - fm[r]) / (2.0 * s) * w[r] * w[c];
+        }
+    }
+    (a, dofs)
+}
+
+/// The normal modes of the fibre about its current (initial) configuration with `ω > 0`,
+/// fastest first: of the fibre itself, or for a fibre longer than [`MAX_MODE_BEADS`] of its
+/// first `MAX_MODE_BEADS` beads with no clamps (a uniform chain's spectrum, branch by
+/// branch, is then sampled at 32 wavenumbers; its top lies within O(1/32²) of the full
+/// fibre's). Rigid-body modes (`ω² <= 1e-9 ω_max²`) are left out.
+pub fn normal_modes(fibre: &Fibre) -> Vec<NormalMode> {
+    let f = first_beads(fibre, MAX_MODE_BEADS);
+    let (a, dofs) = mass_weighted_stiffness(&f);
+    if dofs.is_empty() {
+        return Vec::new();
+    }
+    let eig = ((&a + a.transpose()) * 0.5).symmetric_eigen();
+    let top = eig.eigenvalues.max();
+    let mut modes: Vec<NormalMode> = (0..dofs.len())
+        .filter(|&j| eig.eigenvalues[j] > 1e-9 * top)
+        .map(|j| {
+            let v = eig.eigenvectors.column(j);
+            let translation = dofs
+                .iter()
+                .zip(v.iter())
+                .filter(|(d, _)| !d.rotation)
+                .map(|(_, x)| x * x)
+                .sum::<f64>()
+                / v.norm_squared();
+            NormalMode {
+                omega: eig.eigenvalues[j].sqrt(),
+                translation,
+            }
+        })
+        .collect();
+    modes.sort_by(|a, b| b.omega.total_cmp(&a.omega));
+    modes
 }
 
 /// The beam-stiffness limit of a fibre about its current (initial) configuration.
@@ -309,7 +394,6 @@ mod tests {
         assert_eq!(fpd_margin(4.0), fpd_margin(0.5));
     }
     use crate::config::parse_scene;
-    use nalgebra::DMatrix;
 
     fn fibre(model: &str, beads: usize, dims: u8, extra: &str) -> Fibre {
         let s = parse_scene(&format!(
@@ -321,27 +405,9 @@ mod tests {
 
     /// Dense M^{-1/2} K M^{-1/2} by finite differences, largest eigenvalue.
     fn dense_max(f: &Fibre) -> f64 {
-        let dofs = dofs_of(f);
-        let n = dofs.len();
-        if n == 0 {
+        let (a, dofs) = mass_weighted_stiffness(f);
+        if dofs.is_empty() {
             return 0.0;
-        }
-        let mut work = f.clone();
-        let mut a = DMatrix::zeros(n, n);
-        let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
-        let w: Vec<f64> = dofs
-            .iter()
-            .map(|d| 1.0 / if d.rotation { f.inertia } else { f.mass }.sqrt())
-            .collect();
-        let s = 1e-6;
-        for c in 0..n {
-            let mut u = vec![0.0; n];
-            u[c] = 1.0;
-            forces_at(&mut work, f, &dofs, &u, s, &mut fp);
-            forces_at(&mut work, f, &dofs, &u, -s, &mut fm);
-            for r in 0..n {
-                a[(r, c)] = -(fp[r] - fm[r]) / (2.0 * s) * w[r] * w[c];
-            }
         }
         let sym = (&a + a.transpose()) * 0.5;
         let asym = (&a - &sym).abs().max() / a.abs().max();
