@@ -92,6 +92,20 @@ fn dofs_of(f: &Fibre) -> Vec<Dof> {
     d
 }
 
+/// `1 / sqrt(m)` of each coordinate: the bead's mass or moment of inertia.
+fn inv_sqrt_masses(fibre: &Fibre, dofs: &[Dof]) -> Vec<f64> {
+    dofs.iter()
+        .map(|d| {
+            1.0 / if d.rotation {
+                fibre.inertia
+            } else {
+                fibre.mass
+            }
+            .sqrt()
+        })
+        .collect()
+}
+
 /// Generalised internal forces at `base` displaced by `s u` (u in generalised coordinates).
 fn forces_at(work: &mut Fibre, base: &Fibre, dofs: &[Dof], u: &[f64], s: f64, out: &mut [f64]) {
     work.pos.copy_from_slice(&base.pos);
@@ -124,17 +138,7 @@ pub fn max_eigenvalue(fibre: &Fibre, iterations: usize) -> (f64, usize) {
         return (0.0, 0);
     }
     let mut work = fibre.clone();
-    let inv_sqrt_mass: Vec<f64> = dofs
-        .iter()
-        .map(|d| {
-            1.0 / if d.rotation {
-                fibre.inertia
-            } else {
-                fibre.mass
-            }
-            .sqrt()
-        })
-        .collect();
+    let inv_sqrt_mass = inv_sqrt_masses(fibre, &dofs);
     // Deterministic start: alternating sign per bead times a fixed pseudo-random pattern.
     let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut y: Vec<f64> = dofs
@@ -236,17 +240,7 @@ fn mass_weighted_stiffness(fibre: &Fibre) -> (nalgebra::DMatrix<f64>, Vec<Dof>) 
     let mut work = fibre.clone();
     let mut a = nalgebra::DMatrix::zeros(n, n);
     let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
-    let w: Vec<f64> = dofs
-        .iter()
-        .map(|d| {
-            1.0 / if d.rotation {
-                fibre.inertia
-            } else {
-                fibre.mass
-            }
-            .sqrt()
-        })
-        .collect();
+    let w = inv_sqrt_masses(fibre, &dofs);
     let s = fibre.rest_length() * 1e-6;
     let mut u = vec![0.0; n];
     for c in 0..n {
