@@ -41,6 +41,26 @@ pub fn interface(s: f64, xi: f64, cutoff: f64) -> f64 {
     }
 }
 
+/// Largest step the cut-off may leave in a profile (its distance from 0 or 1 at
+/// `|s| = cutoff`) before configure says so: L2020's xi_c = 2.5 xi leaves 0.028, 3 xi 0.014.
+pub const TRUNCATION_STEP_NOTED: f64 = 0.03;
+
+/// A note for a scene whose cut-off truncates the profile (L2020 eq. 25) where it still
+/// differs from 0 and 1 by more than [`TRUNCATION_STEP_NOTED`]: every bead's surface then
+/// carries a jump of that size, which no refinement of the grid removes.
+pub fn truncation_note(xi: f64, cutoff: f64) -> Option<String> {
+    let step = 1.0 - interface(cutoff, xi, f64::INFINITY);
+    (step > TRUNCATION_STEP_NOTED).then(|| {
+        format!(
+            "fluid.xi_cutoff = {cutoff} is {:.2} fluid.xi: the profile (L2020 eq. 25) is cut \
+             off where it is still {step:.3} from 0 and 1, so each bead's and wall's profile \
+             jumps by that much at r_b +- xi_c; L2020 uses xi_c = 2.5 xi and 3 xi (steps \
+             0.028 and 0.014; the default is 3 xi)",
+            cutoff / xi
+        )
+    })
+}
+
 /// `∫ w(r) phi(r)` over the plane (`dims = 2`, per unit depth) or space (`dims = 3`) for a
 /// radial weight `w`: the sharp core analytically (`core`), the interface shell
 /// `[r_b - xi_c, r_b + xi_c]` by Simpson quadrature along the radius.
@@ -101,6 +121,21 @@ pub fn profile_moment(radius: f64, xi: f64, cutoff: f64, dims: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_profile_cut_off_short_of_its_tails_is_noted() {
+        // The step at the cut-off, 1/2 - 1/2 tanh(xi_c / (sqrt 2 xi)): 0.014 at L2020's
+        // xi_c = 3 xi, 0.028 at 2.5 xi (xi = 2, xi_c = 5), 0.056 at 2 xi.
+        assert!(truncation_note(1.0, 3.0).is_none());
+        assert!(truncation_note(2.0, 5.0).is_none());
+        let note = truncation_note(1.0, 2.0).expect("2 xi is noted");
+        assert!(note.contains("0.056"), "{note}");
+        let note = truncation_note(1.0, 0.5).expect("xi / 2 is noted");
+        assert!(
+            note.contains("0.330") && note.contains("0.50 fluid.xi"),
+            "{note}"
+        );
+    }
 
     #[test]
     fn profile_is_in_unit_interval_and_half_at_the_surface() {

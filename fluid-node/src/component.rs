@@ -670,10 +670,11 @@ impl Component for FluidComponent {
             derived.extend(crate::binary_fluid::derived::numbers(&cfg, b, grid));
         }
 
-        let notes = cfg
+        let mut notes = cfg
             .binary
             .as_ref()
             .map_or_else(Vec::new, crate::binary_fluid::derived::notes);
+        notes.extend(cosim::profile::truncation_note(cfg.xi, cfg.xi_cutoff));
         let total_beads = radii.len();
         let start = StartCheck {
             geometry: StartBox {
