@@ -627,6 +627,18 @@ pub fn analyse_series(
             ),
         )
     };
+    // A label is only as good as the run is long: a straight fibre that has not yet turned
+    // through a half-turn may still fold or stick further on.
+    let net_rotation_deg = (th[n - 1] - th[0]).to_degrees();
+    let reason = if !stuck && net_rotation_deg.abs() < 180.0 {
+        format!(
+            "{reason}; the run turned the fibre through {:.0} deg only, less than a \
+             half-turn: a longer run may still fold or stick",
+            net_rotation_deg.abs()
+        )
+    } else {
+        reason
+    };
     let stuck_kind = stuck.then(|| {
         if r[i_tail..].iter().any(|&x| x < FOLD_RATIO) {
             "s-stuck"
@@ -639,7 +651,7 @@ pub fn analyse_series(
         kind,
         stuck_kind,
         stuck_angle_deg: stuck.then(|| direction_deg(th[n - 1])),
-        net_rotation_deg: (th[n - 1] - th[0]).to_degrees(),
+        net_rotation_deg,
         tail_rate_deg: tail_rate.to_degrees(),
         stuck_threshold_deg: threshold.to_degrees(),
         tail_rate_trend,

@@ -129,6 +129,31 @@ fn jeffery_rod_gives_its_aspect_ratio_and_period() {
     assert!(a.stuck_angle_deg.is_none() && a.folds == 0);
 }
 
+/// The first fifth of the same rod's first half-turn: still labelled by what it did (straight,
+/// turning), but the note says the run is too short to rule out a fold or a stop.
+#[test]
+fn a_run_short_of_a_half_turn_says_so() {
+    let history = jeffery_rod_history();
+    let full = 2.0 * PI * (1.0 / RC + RC) / GAMMA;
+    let short = &history[..(0.1 * full / 0.005) as usize];
+    let a = analyse(
+        &beads_along(N, short, |_, _| 0.0),
+        GAMMA,
+        Orientation::EndToEnd,
+    )
+    .unwrap();
+    assert_eq!(a.kind, OrbitKind::Jeffery, "{}", a.reason);
+    assert!(a.net_rotation_deg.abs() < 180.0);
+    assert!(a.reason.contains("less than a half-turn"), "{}", a.reason);
+    let whole = analyse(
+        &beads_along(N, &history, |_, _| 0.0),
+        GAMMA,
+        Orientation::EndToEnd,
+    );
+    let whole = whole.unwrap();
+    assert!(!whole.reason.contains("half-turn"), "{}", whole.reason);
+}
+
 /// Another aspect ratio, principal-axis orientation: the fit is not tied to one value.
 #[test]
 fn jeffery_fit_follows_the_aspect_ratio() {
