@@ -476,7 +476,12 @@ impl Component for FibreComponent {
             // A mode the once-per-step impulse feeds (spm_exchange_stiffness.rs).
             if let (Some(r), false, true) = (exchange, cfg.clamp.len() == cfg.beads, explicit) {
                 let p = format!("fibre.{n}");
-                let x = spm_exchange_stiffness::check(&p, &f, lim.omega_max, r, scene.dt)
+                let diffusion = scene
+                    .fluid_kinematic_viscosity
+                    .zip(scene.spm_profile)
+                    .map(|(nu, profile)| nu * scene.dt / (profile.xi * profile.xi));
+                let share = spm_exchange_stiffness::flow_share(diffusion);
+                let x = spm_exchange_stiffness::check(&p, &f, lim.omega_max, r, (scene.dt, share))
                     .map_err(ComponentError)?;
                 if let Some(dt_limit) = x.limit() {
                     limits.push((format!("explicit exchange stiffness ({p})"), dt_limit));

@@ -112,6 +112,10 @@ pub struct SceneConfig {
     /// `fluid.density` (mass / length^dimensions, default 1): sets the gains that hold
     /// clamped beads under FPD and the FPD stiffness limit. The fluid node validates it.
     pub fluid_density: f64,
+    /// `fluid.viscosity / fluid.density` where the scene gives the viscosity: under SPM the
+    /// explicit exchange's stiffness limit depends on `nu dt / xi^2`. The fluid node
+    /// validates it.
+    pub fluid_kinematic_viscosity: Option<f64>,
     /// Under FPD: `fluid.interface_ratio` r_xi = xi / d (default 0.125, the fluid node's),
     /// on which the FPD stiffness limit depends. The fluid node validates it.
     pub fpd_interface_ratio: Option<f64>,
@@ -284,6 +288,12 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         .and_then(toml_number)
         .filter(|r| r.is_finite() && *r > 0.0)
         .unwrap_or(1.0);
+    let fluid_kinematic_viscosity = table
+        .get("fluid")
+        .and_then(|f| f.get("viscosity"))
+        .and_then(toml_number)
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .map(|v| v / fluid_density);
     let fpd_interface_ratio = (coupling == Coupling::Fpd).then(|| {
         table
             .get("fluid")
@@ -381,6 +391,7 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         has_fluid,
         coupling,
         fluid_density,
+        fluid_kinematic_viscosity,
         fpd_interface_ratio,
         spm_profile,
         shear_flow: (coupling != Coupling::None)
