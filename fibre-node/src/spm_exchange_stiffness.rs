@@ -472,7 +472,7 @@ pub fn check(
          35-36), feeds its mode of omega = {:.6e} (omega dt = {:.3}; {:.0} % of its kinetic \
          energy in translation, flow share times profile-to-bead ratio k r = {:.3}), which \
          grows by {g:.4} a step at this time.dt or up to {:.0} % above it (a one-mode model \
-         with k = {share}, docs/validation/spm.md \
+         with the flow share k = {share} for this nu dt / xi^2, docs/validation/spm.md \
          \"The explicit exchange's stiffness limit\"); set {p}.exchange = \"implicit\" (no \
          such limit){damping}{lower}",
         mode.omega,
