@@ -146,6 +146,23 @@ pub const MEASURED_THRESHOLDS: [MeasuredThreshold; 7] = [
     beam(3, 2, 1.5, 4, 0.7, [117.9, 120.9], 600),
 ];
 
+/// `t` with radius-6 beads (`configs/spm/jeffery_rigid.toml`).
+const fn radius_6(t: MeasuredThreshold) -> MeasuredThreshold {
+    MeasuredThreshold {
+        bead_radius: 6.0,
+        ..t
+    }
+}
+
+/// `t` with radius-6 beads and the capillary scenes' wider profile (xi = 2, xi_c = 5).
+const fn wide(t: MeasuredThreshold) -> MeasuredThreshold {
+    MeasuredThreshold {
+        xi: 2.0,
+        xi_cutoff: 5.0,
+        ..radius_6(t)
+    }
+}
+
 /// Thresholds measured after the calibration, on what it did not see: a bead-spring chain,
 /// radius-6 beads (`configs/spm/jeffery_rigid.toml` with four beads), the wider profile of
 /// the capillary scenes (xi = 2, xi_c = 5), the three-bead 3D chain of
@@ -163,43 +180,14 @@ pub const HELD_OUT_THRESHOLDS: [MeasuredThreshold; 10] = [
         chord: true,
         ..beam(2, 4, 1.0, 4, 0.25, [207.3, 218.6], 1500)
     },
-    MeasuredThreshold {
-        bead_radius: 6.0,
-        ..beam(2, 4, 1.0, 4, 0.7, [25.54, 26.55], 1500)
-    },
-    MeasuredThreshold {
-        bead_radius: 6.0,
-        xi: 2.0,
-        xi_cutoff: 5.0,
-        ..beam(2, 4, 1.3, 4, 0.7, [21.81, 22.78], 1500)
-    },
+    radius_6(beam(2, 4, 1.0, 4, 0.7, [25.54, 26.55], 1500)),
+    wide(beam(2, 4, 1.3, 4, 0.7, [21.81, 22.78], 1500)),
     beam(3, 3, 1.1, 4, 0.7, [36.0, 37.03], 600),
-    MeasuredThreshold {
-        bead_radius: 6.0,
-        xi: 2.0,
-        xi_cutoff: 5.0,
-        ..beam(2, 4, 1.3, 4, 10.0, [0.08585, 0.08682], 1500)
-    },
-    MeasuredThreshold {
-        bead_radius: 6.0,
-        xi: 2.0,
-        xi_cutoff: 5.0,
-        ..beam(2, 4, 1.3, 4, 20.0, [0.01947, 0.01979], 1500)
-    },
-    MeasuredThreshold {
-        bead_radius: 6.0,
-        ..beam(2, 4, 1.3, 4, 2.5, [2.735, 2.765], 1500)
-    },
-    MeasuredThreshold {
-        bead_radius: 6.0,
-        xi: 2.0,
-        xi_cutoff: 5.0,
-        ..beam(2, 4, 1.3, 1, 2.8, [0.5018, 0.5117], 1500)
-    },
-    MeasuredThreshold {
-        bead_radius: 6.0,
-        ..beam(2, 4, 1.0, 2, 1.5, [4.216, 4.295], 1500)
-    },
+    wide(beam(2, 4, 1.3, 4, 10.0, [0.08585, 0.08682], 1500)),
+    wide(beam(2, 4, 1.3, 4, 20.0, [0.01947, 0.01979], 1500)),
+    radius_6(beam(2, 4, 1.3, 4, 2.5, [2.735, 2.765], 1500)),
+    wide(beam(2, 4, 1.3, 1, 2.8, [0.5018, 0.5117], 1500)),
+    radius_6(beam(2, 4, 1.0, 2, 1.5, [4.216, 4.295], 1500)),
 ];
 
 /// Fraction of the model's limit that configure accepts.
@@ -531,8 +519,8 @@ mod tests {
         }
     }
 
-    /// The share grows with the diffusion number in bands, each at least the largest share a
-    /// measured threshold in it implies (printed by `implied_flow_shares`).
+    /// The share steps up above the calibrated diffusion number, to at least the largest share
+    /// a held-out threshold there implies (printed by `implied_flow_shares`).
     #[test]
     fn the_flow_share_grows_with_the_diffusion_number() {
         assert_eq!(flow_share(Some(0.25)), FLOW_SHARE);
