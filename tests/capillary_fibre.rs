@@ -30,8 +30,11 @@ fn assert_bounded(summary: &serde_json::Value) {
 
 /// L2020 section 3.4 (Fig. 9) on a 64^2 grid with N_b = 5 (tumbling_2d.toml has 128^2,
 /// N_b = 9): a neutral fibre (psi0 = 0, Ec = 10) tilted by 50 degrees across a flat
-/// interface ends aligned with it. Measured: 1.6 deg after t = 50000 (it passes 5 deg near
-/// t = 38000). Tolerance: L2020's "aligns", taken as final_tilt_deg < 5.
+/// interface ends aligned with it. Measured: 1.5 deg after t = 50000 (1.6 at time.dt = 2,
+/// which the explicit exchange's stiffness check refuses since its flow share grows with
+/// nu dt / xi^2: docs/validation/spm.md; this fibre runs there at 91 % of its measured
+/// threshold step, the check accepts up to 1.90). Tolerance: L2020's "aligns", taken as
+/// final_tilt_deg < 5.
 /// Psi mass: the slab is symmetric, mean psi = 0, kept by the spectral step to round-off.
 #[test]
 fn tilted_fibre_aligns_with_a_flat_interface() {
@@ -43,8 +46,8 @@ fn tilted_fibre_aligns_with_a_flat_interface() {
             ("fluid.binary.position", "32.0"),
             // The centre (32, 32) - 24 (cos 50, sin 50).
             ("fibre.0.start", "[16.573097, 13.614933, 0.0]"),
-            ("time.dt", "2.0"),
-            ("time.steps", "25000"),
+            ("time.dt", "1.85"),
+            ("time.steps", "27027"),
             ("output.interval", "5000"),
         ]),
         "capillary_tumbling_small",
