@@ -22,7 +22,7 @@ fn small_capillary() -> Vec<String> {
         "fibre.0.beads=4",
         "fluid.binary.position=24.0",
         "fibre.0.start=[12.0,10.0,0.0]",
-        "time.dt=2.0",
+        "time.dt=1.8",
         "time.steps=40",
         "output.interval=5",
         "analysis.metrics=[]",
