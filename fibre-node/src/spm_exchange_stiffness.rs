@@ -207,15 +207,19 @@ const fn wide(t: MeasuredThreshold) -> MeasuredThreshold {
     }
 }
 
+/// `t` in a fluid of viscosity `viscosity` (density 1).
+const fn viscous(viscosity: f64, t: MeasuredThreshold) -> MeasuredThreshold {
+    MeasuredThreshold { viscosity, ..t }
+}
+
 /// Thresholds measured after the calibration, on what it did not see: a bead-spring chain,
 /// radius-6 beads (`configs/spm/jeffery_rigid.toml` with four beads), the wider profile of
 /// the capillary scenes (xi = 2, xi_c = 5), the three-bead 3D chain of
-/// `configs/spm/jeffery_rigid_3d.toml` (also at `nu dt / xi^2` = 2.5 and 5),
-/// and (from the sixth on) fluid steps with
-/// `nu dt / xi^2` = 0.7 to 40 (`jeffery_rigid.toml`, four beads of density 1.0 or 1.3, the
-/// Young's modulus bisected in 1500-step in-process runs, `time.dt`, `fluid.xi`,
-/// `fluid.xi_cutoff`, `fluid.viscosity` and `fibre.0.substeps` as listed; and the capillary
-/// test scene of
+/// `configs/spm/jeffery_rigid_3d.toml` (also at `nu dt / xi^2` = 2.5 and 5), and (from the
+/// sixth on) fluid steps with `nu dt / xi^2` = 0.7 to 40 (`jeffery_rigid.toml`, four beads
+/// of density 1.0 or 1.3, the Young's modulus bisected in 1500-step in-process runs,
+/// `time.dt`, `fluid.xi`, `fluid.xi_cutoff`, `fluid.viscosity` and `fibre.0.substeps` as
+/// listed; and the capillary test scene of
 /// `tests/capillary_fibre.rs::tilted_fibre_aligns_with_a_flat_interface`,
 /// `configs/capillary/tumbling_2d.toml` at 64 x 64 with five beads and time.dt = 2).
 pub const HELD_OUT_THRESHOLDS: [MeasuredThreshold; 25] = [
@@ -238,37 +242,31 @@ pub const HELD_OUT_THRESHOLDS: [MeasuredThreshold; 25] = [
     radius_6(beam(2, 4, 1.0, 2, 1.5, [4.216, 4.295], 1500)),
     wide(beam(2, 4, 1.0, 4, 10.0, [0.02143, 0.02159], 1500)),
     wide(beam(2, 4, 1.0, 4, 20.0, [0.003306, 0.003336], 1500)),
-    MeasuredThreshold {
-        viscosity: 10.0,
-        ..wide(beam(2, 5, 1.0, 1, 2.0, [0.1268, 0.1275], 1500))
-    },
+    viscous(10.0, wide(beam(2, 5, 1.0, 1, 2.0, [0.1268, 0.1275], 1500))),
     wide(beam(2, 4, 1.3, 4, 40.0, [0.004627, 0.004658], 1500)),
     wide(beam(2, 4, 1.0, 4, 40.0, [0.0004796, 0.0004829], 1500)),
     wide(beam(2, 4, 1.0, 1, 20.0, [0.0012375, 0.0012442], 1500)),
     wide(beam(2, 4, 1.0, 1, 10.0, [0.008091, 0.008172], 1500)),
     wide(beam(2, 4, 1.0, 1, 40.0, [0.0001779, 0.0001797], 1500)),
-    MeasuredThreshold {
-        viscosity: 2.0,
-        ..wide(beam(2, 4, 1.0, 4, 40.0, [0.0002872, 0.0002887], 1500))
-    },
-    MeasuredThreshold {
-        viscosity: 2.0,
-        ..wide(beam(2, 4, 1.3, 4, 40.0, [0.004480, 0.004503], 1500))
-    },
+    viscous(
+        2.0,
+        wide(beam(2, 4, 1.0, 4, 40.0, [0.0002872, 0.0002887], 1500)),
+    ),
+    viscous(
+        2.0,
+        wide(beam(2, 4, 1.3, 4, 40.0, [0.004480, 0.004503], 1500)),
+    ),
     beam(3, 3, 1.1, 4, 2.5, [1.896, 1.910], 600),
     beam(3, 3, 1.1, 8, 5.0, [0.3716, 0.3749], 600),
-    MeasuredThreshold {
-        viscosity: 10.0,
-        ..wide(beam(2, 4, 1.0, 1, 2.0, [0.1313, 0.1322], 1500))
-    },
-    MeasuredThreshold {
-        viscosity: 4.0,
-        ..wide(beam(2, 4, 1.0, 4, 40.0, [0.0001943, 0.0001953], 1500))
-    },
-    MeasuredThreshold {
-        viscosity: 4.0,
-        ..wide(beam(2, 4, 1.3, 4, 40.0, [0.004409, 0.004433], 1500))
-    },
+    viscous(10.0, wide(beam(2, 4, 1.0, 1, 2.0, [0.1313, 0.1322], 1500))),
+    viscous(
+        4.0,
+        wide(beam(2, 4, 1.0, 4, 40.0, [0.0001943, 0.0001953], 1500)),
+    ),
+    viscous(
+        4.0,
+        wide(beam(2, 4, 1.3, 4, 40.0, [0.004409, 0.004433], 1500)),
+    ),
 ];
 
 /// Fraction of the model's limit that configure accepts.
