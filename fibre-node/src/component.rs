@@ -481,8 +481,14 @@ impl Component for FibreComponent {
                     .zip(scene.spm_profile)
                     .map(|(nu, profile)| nu * scene.dt / (profile.xi * profile.xi));
                 let share = spm_exchange_stiffness::flow_share(diffusion);
-                let x = spm_exchange_stiffness::check(&p, &f, lim.omega_max, r, (scene.dt, share))
-                    .map_err(ComponentError)?;
+                let x = spm_exchange_stiffness::check(
+                    &p,
+                    (&f, cfg.density),
+                    lim.omega_max,
+                    r,
+                    (scene.dt, share),
+                )
+                .map_err(ComponentError)?;
                 if let Some(dt_limit) = x.limit() {
                     limits.push((format!("explicit exchange stiffness ({p})"), dt_limit));
                 }
