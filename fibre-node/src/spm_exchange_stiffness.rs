@@ -224,7 +224,7 @@ const fn viscous(viscosity: f64, t: MeasuredThreshold) -> MeasuredThreshold {
 /// listed; and `configs/capillary/tumbling_2d.toml` at time.dt = 2: the capillary test
 /// scene of `tests/capillary_fibre.rs::tilted_fibre_aligns_with_a_flat_interface`, 64 x 64
 /// with five beads, the same with four, and the scene itself, nine beads on 128 x 128).
-pub const HELD_OUT_THRESHOLDS: [MeasuredThreshold; 29] = [
+pub const HELD_OUT_THRESHOLDS: [MeasuredThreshold; 30] = [
     MeasuredThreshold {
         model: "bead-spring",
         ..beam(2, 4, 1.0, 4, 0.25, [202.3, 210.3], 1500)
@@ -270,6 +270,7 @@ pub const HELD_OUT_THRESHOLDS: [MeasuredThreshold; 29] = [
         10.0,
         wide(beam(2, 9, 1.0, 1, 2.0, [0.11785, 0.11870], 1500)),
     ),
+    viscous(10.0, wide(beam(2, 9, 1.0, 1, 1.0, [0.7435, 0.7484], 1500))),
     viscous(10.0, wide(beam(2, 4, 1.0, 1, 2.0, [0.1313, 0.1322], 1500))),
     viscous(
         4.0,
@@ -823,7 +824,7 @@ mod tests {
     /// The nine-bead capillary fibre (`tumbling_2d.toml` at time.dt = 2): the one case the
     /// check is far too strict on ([`accepts_most_of_the_nine_bead_capillary_fibre`]).
     fn nine_beads(t: &MeasuredThreshold) -> bool {
-        t.beads == 9
+        t.beads == 9 && t.dt == 2.0
     }
 
     /// Every measured threshold, those calibrated on and those held out: the check refuses
@@ -848,7 +849,8 @@ mod tests {
     /// 5, density 1) the check accepts 66 % of the measured threshold step, 44 % of its
     /// modulus. The share a fibre's threshold implies falls with its length there (four
     /// beads 0.975, five 0.965, nine 0.955) while the modelled ratio r of its limiting mode
-    /// rises (1.92, 1.94, 1.97), so that k r at the threshold stays near 1.88: the one-mode
+    /// rises (1.92, 1.94, 1.97), so that k r at the threshold stays near 1.88 (at 2.5: 1.81
+    /// for four and nine beads, k 0.939 and 0.920; there the check accepts 79 %): the one-mode
     /// model over-weights the rotation of a long fibre's fastest modes near the light-bead
     /// limit, and the check, calibrated on four beads, refuses long fibres it could carry.
     #[test]
