@@ -538,28 +538,45 @@ pub fn check(
     // Heavier beads: f times the density divides every ratio by f and every mode's omega by
     // sqrt f (the beads' mass and moment of inertia both grow with it, bead_inertia "solid"
     // or "profile"), which also relaxes the fibre's own step.
+    let carries = |f: f64| {
+        let (w, tau) = (omega_max / f.sqrt(), fibre.internal_damping);
+        let own = stable_step(w, c + tau * w * w);
+        let slower: Vec<_> = modes
+            .iter()
+            .map(|m| NormalMode {
+                omega: m.omega / f.sqrt(),
+                ..*m
+            })
+            .collect();
+        let lighter = ExchangeRatios {
+            mass: r.mass / f,
+            inertia: r.inertia / f,
+        };
+        own * STEP_SAFETY * n as f64 >= dt
+            && largest_growth(&slower, lighter, c, tau, (n, share), dt)
+                .is_none_or(|w| w.0 <= 1.0 + 1e-9)
+    };
+    // The first of 5 % steps that carries the fibre, then bisected down to 0.01 % (a factor
+    // that passes is kept).
     let heavier = (1..=64)
         .map(|j| 1.05f64.powi(j))
-        .find(|&f| {
-            let (w, tau) = (omega_max / f.sqrt(), fibre.internal_damping);
-            let own = stable_step(w, c + tau * w * w);
-            let slower: Vec<_> = modes
-                .iter()
-                .map(|m| NormalMode {
-                    omega: m.omega / f.sqrt(),
-                    ..*m
-                })
-                .collect();
-            let lighter = ExchangeRatios {
-                mass: r.mass / f,
-                inertia: r.inertia / f,
-            };
-            own * STEP_SAFETY * n as f64 >= dt
-                && largest_growth(&slower, lighter, c, tau, (n, share), dt)
-                    .is_none_or(|w| w.0 <= 1.0 + 1e-9)
+        .find(|&f| carries(f))
+        .map(|mut f| {
+            let mut below = f / 1.05;
+            while f / below > 1.0001 {
+                let mid = (f * below).sqrt();
+                if carries(mid) {
+                    f = mid;
+                } else {
+                    below = mid;
+                }
+            }
+            f
         })
         .map_or(String::new(), |f| {
-            format!(", raise {p}.density to at least {:.4}", density * f)
+            // Rounded up, so that the density named passes too.
+            let at_least = (density * f * 1e4).ceil() / 1e4;
+            format!(", raise {p}.density to at least {at_least:.4}")
         });
     let lower = lim.map_or(String::new(), |l| {
         format!(
