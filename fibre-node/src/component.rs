@@ -480,13 +480,12 @@ impl Component for FibreComponent {
                     .fluid_kinematic_viscosity
                     .zip(scene.spm_profile)
                     .map(|(nu, profile)| nu * scene.dt / (profile.xi * profile.xi));
-                let share = spm_exchange_stiffness::flow_share(diffusion);
                 let x = spm_exchange_stiffness::check(
                     &p,
                     (&f, cfg.density),
                     lim.omega_max,
                     r,
-                    (scene.dt, share),
+                    (scene.dt, diffusion),
                 )
                 .map_err(ComponentError)?;
                 if let Some(dt_limit) = x.limit() {

@@ -14,10 +14,8 @@
 //! mass-proportional damping `c` (`crate::fibre`); the corrector spreads the fluid's impulse
 //! evenly over the sub-steps. If the flow around takes a fraction `k` of the profile fluid's
 //! excess motion during the step, the impulse is `−k r v0` with `v0` the mode's velocity at
-//! the step's start and `r` the mode's profile-to-bead ratio: the fluid in the profiles over
-//! the bead inertia, weighted by where the mode's kinetic energy lies,
-//! `r = s m_phi / M + (1 − s) I_phi / I` with `s` its share in translation
-//! ([`crate::stability::NormalMode`]). Each sub-step is
+//! the step's start and `r` the profile-to-bead ratio (the fluid in the profile over the
+//! bead's mass, or moment of inertia for a rotation). Each sub-step is
 //!
 //! ```text
 //! x' = x + h v,   v' = v − h ω² x' − h c v − (k r / n) v0,
@@ -29,6 +27,18 @@
 //! `ω dt` falls with `r` (2.24 at `k r = 1` with four sub-steps, 1.41 with one) and is zero
 //! for `k r >= 2`, the light-bead limit of [`crate::spm_exchange`].
 //!
+//! # Every mode at once
+//! A cohesive beam's modes mix the beads' translations, whose ratio is `r_m = m_phi / M`,
+//! with their rotations, `r_I = I_phi / I`, so the drag couples its modes: in the basis `Q`
+//! of the elastic modes of `M^{-1/2} K M^{-1/2}` it is `−k C v0` with `C = Q^T R Q` (`R`:
+//! `r_m` on each translation, `r_I` on each rotation), and the step above becomes one of
+//! `(x, v, v0)` for all modes at once ([`CoupledModes`]: the fastest [`MAX_COUPLED_MODES`]
+//! modes; a dense nonsymmetric eigenproblem per step tried). A bead-spring chain has
+//! `C = r_m I` and falls apart into single modes. Taking each mode alone with its
+//! energy-weighted ratio, as this check first did, under-rates the drag near the
+//! light-bead limit: the rotations, with the larger ratio, grow while the translations are
+//! damped, so a cohesive beam's limit lies below every single mode's.
+//!
 //! # The flow's share `k`
 //! `k` is not known a priori: it grows with `nu dt / xi^2` and depends on the profile. It
 //! is calibrated on the thresholds measured by bisection of the Young's modulus in coupled
@@ -37,16 +47,20 @@
 //! is the largest `k` those thresholds imply, so the model's limit lies at or below every one
 //! of them; configure then keeps the margin [`SAFETY`] below it. Held out of the fit
 //! ([`HELD_OUT_THRESHOLDS`]), the share grows with the diffusion number: at xi = 2 it is
-//! 0.82, 0.86, 0.94, 0.965-0.979, 0.996-1.005, 1.008-1.019 and 1.013-1.026 at
+//! 0.82, 0.86, 0.92-0.93, 0.952-0.973, 0.975-0.994, 0.987-1.006 and 0.993-1.011 at
 //! `nu dt / xi^2` = 0.175, 0.7, 2.5, 5, 10, 20 and 40 (the 3D chain at xi = 1: 0.84, 0.93,
-//! 0.982, 1.012 and 1.024 at 0.7, 2.5, 5, 10 and 20).
+//! 0.977, 1.004 and 1.014 at 0.7, 2.5, 5, 10 and 20).
 //! So above the calibrated 0.7 the check takes [`FLOW_SHARE_ABOVE_CALIBRATED`], and from
 //! 2.5 on a share that grows with the diffusion number ([`FLOW_SHARE_RAMP`],
 //! [`flow_share`]); the fibre node reads `nu` from `fluid.viscosity / fluid.density`.
+//! Light beads take less: near the light-bead limit (`r_I` = 1.985 at density 1.0, xi = 2)
+//! the coupling `k r_I` their thresholds imply stays below a cap that grows with the
+//! diffusion number towards 2 ([`COUPLING_CAP`]), where heavier beads imply shares above 1.
+//! The check takes the smaller of the two ([`share`]).
 use crate::fibre::Fibre;
 use crate::spm_exchange::ExchangeRatios;
-use crate::stability::{normal_modes, stable_step, NormalMode, SAFETY as STEP_SAFETY};
-use nalgebra::{Matrix2, Matrix3};
+use crate::stability::{mass_weighted_stiffness_matrix, stable_step, SAFETY as STEP_SAFETY};
+use nalgebra::DMatrix;
 
 /// The fraction of the profile fluid's excess motion the flow is taken to absorb in one
 /// step (the module's `k`), calibrated on [`MEASURED_THRESHOLDS`].
@@ -58,23 +72,21 @@ pub const CALIBRATED_DIFFUSION_NUMBER: f64 = 0.7;
 
 /// The flow's share above [`CALIBRATED_DIFFUSION_NUMBER`] and up to the first point of
 /// [`FLOW_SHARE_RAMP`]: the flow takes more of the profile's excess motion the further it
-/// diffuses in a step. The held-out thresholds there imply 0.69, 0.76 (xi = 1, at 1.5 and
-/// 2.5) and 0.936-0.939 (xi = 2, at 2.5) ([`HELD_OUT_THRESHOLDS`]).
+/// diffuses in a step. The held-out thresholds there imply 0.69, 0.75 (xi = 1, at 1.5 and
+/// 2.5), 0.919-0.934 (xi = 2, at 2.5) and 0.929 (3D, xi = 1, at 2.5)
+/// ([`HELD_OUT_THRESHOLDS`]).
 pub const FLOW_SHARE_ABOVE_CALIBRATED: f64 = 0.95;
 
 /// `(nu dt / xi^2, k)`: from the first point on, the share grows linearly between the points
 /// and by [`FLOW_SHARE_PER_DOUBLING`] per doubling of `nu dt / xi^2` beyond the last. Each
 /// point lies at or above the largest share the held-out thresholds at that diffusion number
-/// imply ([`HELD_OUT_THRESHOLDS`]): at 2.5, 0.932-0.939; at 5, 0.955-0.974 (the
-/// `tumbling_2d.toml` fibre shortened to four and five beads, the latter the capillary test
-/// scene of `tests/capillary_fibre.rs::tilted_fibre_aligns_with_a_flat_interface`, and at
-/// its nine), 0.975-0.979 (`jeffery_rigid.toml`, densities 1.3 and 1.0, one or four sub-steps,
-/// viscosity 1 or 10) and 0.982 (the 3D chain of `jeffery_rigid_3d.toml`); at 10,
-/// 0.996-1.005 (3D 1.012); at 20, 1.008-1.019 (3D 1.024); at 40, 1.013-1.026: the flow
-/// takes all of the profile's excess motion (a share above 1 is the one-mode model's
-/// approximation of the fibre's modes). Near the light-bead limit (a mode's profile-to-bead ratio 1.92 at density 1.0,
-/// where k r = 2 leaves no stable step) the threshold moves fast with k: k = 0.95 accepted
-/// 114 % of the measured step at 5, and 150 % at 10.
+/// imply ([`HELD_OUT_THRESHOLDS`]): at 2.5, 0.919-0.934; at 5, 0.952-0.969 (density 1.0:
+/// `jeffery_rigid.toml` with four, six and nine beads, one or four sub-steps, viscosity 1
+/// or 10, and the capillary scenes with four, five and nine beads), 0.953-0.973 (density
+/// 1.3) and 0.977 (the 3D chain of `jeffery_rigid_3d.toml`); at 10, 0.975-0.994 (3D 1.004);
+/// at 20, 0.987-1.006 (3D 1.014); at 40, 0.993-1.011. The heavier beads and the 3D chain
+/// imply shares above 1 (the flow's response lags the fibre's vibration); the light beads
+/// of density 1.0 do not, and [`COUPLING_CAP`] holds their share below this.
 pub const FLOW_SHARE_RAMP: [(f64, f64); 5] = [
     (2.5, 0.95),
     (5.0, 0.985),
@@ -84,8 +96,8 @@ pub const FLOW_SHARE_RAMP: [(f64, f64); 5] = [
 ];
 
 /// Beyond the last point of [`FLOW_SHARE_RAMP`], where nothing was measured, the share keeps
-/// growing by this much per doubling of `nu dt / xi^2`: the measured shares of density-1
-/// beads grew by 0.015 and 0.007 per doubling from 10 to 40 (1.004, 1.019, 1.026).
+/// growing by this much per doubling of `nu dt / xi^2`: the measured shares of density-1.3
+/// beads grew by 0.012 and 0.005 per doubling from 10 to 40 (0.994, 1.006, 1.011).
 pub const FLOW_SHARE_PER_DOUBLING: f64 = 0.01;
 
 /// The flow's share `k` the check takes for a fluid step of diffusion number
@@ -108,6 +120,55 @@ pub fn flow_share(diffusion_number: Option<f64>) -> f64 {
             k0 + (k1 - k0) * (d - d0) / (d1 - d0)
         },
     )
+}
+
+/// `(nu dt / xi^2, k r)`: from the first point on, the largest coupling `k max(r_m, r_I)`
+/// the check takes, linear between the points (below the first, none). Near the
+/// light-bead limit the flow takes less than the share heavier beads imply
+/// ([`HELD_OUT_THRESHOLDS`]): each point lies at or above the largest coupling the
+/// density-1.0 thresholds at that diffusion number imply (xi = 2, four beads: 1.854, 1.923,
+/// 1.956, 1.974 and 1.982 at 2.5, 5, 10, 20 and 40; nine beads 1.825, 1.891, 1.935, 1.960,
+/// 1.972). Beyond the last point, where nothing was measured, the distance to the
+/// light-bead limit 2 halves with each doubling of `nu dt / xi^2` (the four-bead
+/// thresholds' distance fell by a third from 20 to 40).
+pub const COUPLING_CAP: [(f64, f64); 5] = [
+    (2.5, 1.86),
+    (5.0, 1.93),
+    (10.0, 1.96),
+    (20.0, 1.976),
+    (40.0, 1.984),
+];
+
+/// The largest coupling `k max(r_m, r_I)` the check takes at the diffusion number
+/// `nu dt / xi^2` ([`COUPLING_CAP`]; `None`: unknown, the cap at the last measured point).
+pub fn coupling_cap(diffusion_number: Option<f64>) -> f64 {
+    let (d_last, c_last) = COUPLING_CAP[COUPLING_CAP.len() - 1];
+    let Some(d) = diffusion_number else {
+        return c_last;
+    };
+    if d < COUPLING_CAP[0].0 {
+        return f64::INFINITY;
+    }
+    COUPLING_CAP
+        .windows(2)
+        .find(|w| d <= w[1].0)
+        .map_or(2.0 - (2.0 - c_last) * d_last / d, |w| {
+            let ((d0, c0), (d1, c1)) = (w[0], w[1]);
+            c0 + (c1 - c0) * (d - d0) / (d1 - d0)
+        })
+}
+
+/// The flow's share `k` the check takes for a fluid step of diffusion number `diffusion`
+/// and beads whose larger profile-to-bead ratio is `largest_ratio`: [`flow_share`], but no
+/// more than [`coupling_cap`] over the ratio.
+pub fn share(diffusion: Option<f64>, largest_ratio: f64) -> f64 {
+    let k = flow_share(diffusion);
+    let cap = coupling_cap(diffusion);
+    if largest_ratio > 0.0 {
+        k.min(cap / largest_ratio)
+    } else {
+        k
+    }
 }
 
 /// One threshold measured in coupled runs: Young's modulus bisected between a run that
@@ -145,9 +206,9 @@ impl MeasuredThreshold {
         self.viscosity * self.dt / (self.xi * self.xi)
     }
 
-    /// The flow's share the check takes for this case.
-    pub fn share(&self) -> f64 {
-        flow_share(Some(self.diffusion_number()))
+    /// The flow's share the check takes for this case, whose coupled modes are `modes`.
+    pub fn share_of(&self, modes: &CoupledModes) -> f64 {
+        share(Some(self.diffusion_number()), modes.largest_ratio())
     }
 }
 
@@ -223,8 +284,10 @@ const fn viscous(viscosity: f64, t: MeasuredThreshold) -> MeasuredThreshold {
 /// `time.dt`, `fluid.xi`, `fluid.xi_cutoff`, `fluid.viscosity` and `fibre.0.substeps` as
 /// listed; and `configs/capillary/tumbling_2d.toml` at time.dt = 2: the capillary test
 /// scene of `tests/capillary_fibre.rs::tilted_fibre_aligns_with_a_flat_interface`, 64 x 64
-/// with five beads, the same with four, and the scene itself, nine beads on 128 x 128).
-pub const HELD_OUT_THRESHOLDS: [MeasuredThreshold; 30] = [
+/// with five beads, the same with four, and the scene itself, nine beads on 128 x 128);
+/// the last eight: `jeffery_rigid.toml` with nine beads (six in one), xi = 2, xi_c = 5,
+/// viscosity 10, one sub-step, `nu dt / xi^2` = 2.5 to 40, density 1.0 or 1.3).
+pub const HELD_OUT_THRESHOLDS: [MeasuredThreshold; 38] = [
     MeasuredThreshold {
         model: "bead-spring",
         ..beam(2, 4, 1.0, 4, 0.25, [202.3, 210.3], 1500)
@@ -280,6 +343,32 @@ pub const HELD_OUT_THRESHOLDS: [MeasuredThreshold; 30] = [
         4.0,
         wide(beam(2, 4, 1.3, 4, 40.0, [0.004409, 0.004433], 1500)),
     ),
+    viscous(10.0, wide(beam(2, 9, 1.0, 1, 1.0, [0.7486, 0.7537], 1500))),
+    viscous(
+        10.0,
+        wide(beam(2, 9, 1.0, 1, 2.0, [0.11797, 0.11840], 1500)),
+    ),
+    viscous(
+        10.0,
+        wide(beam(2, 9, 1.0, 1, 4.0, [0.017567, 0.017628], 1500)),
+    ),
+    viscous(
+        10.0,
+        wide(beam(2, 9, 1.0, 1, 8.0, [0.0027039, 0.0027197], 1500)),
+    ),
+    viscous(
+        10.0,
+        wide(beam(2, 9, 1.0, 1, 16.0, [0.00048226, 0.00048530], 1500)),
+    ),
+    viscous(
+        10.0,
+        wide(beam(2, 6, 1.0, 1, 2.0, [0.12161, 0.12204], 1500)),
+    ),
+    viscous(10.0, wide(beam(2, 9, 1.3, 1, 2.0, [0.7236, 0.7265], 1500))),
+    viscous(
+        10.0,
+        wide(beam(2, 9, 1.3, 1, 8.0, [0.04063, 0.04084], 1500)),
+    ),
 ];
 
 /// Fraction of the model's limit that configure accepts.
@@ -292,89 +381,203 @@ pub const MAX_OMEGA_DT: f64 = 8.0;
 /// Points of the scan for the first instability before it is bisected.
 const SCAN_POINTS: usize = 800;
 
-/// Spectral radius of one fluid step of the one-mode model (module documentation) at
-/// `ω dt = omega_dt`, `c dt = damping_dt`, coupling `k r = ratio`, `n = substeps`.
-pub fn one_mode_growth(omega_dt: f64, damping_dt: f64, ratio: f64, substeps: usize) -> f64 {
-    let n = substeps.max(1);
-    let (h, hc) = (omega_dt / n as f64, damping_dt / n as f64);
-    // In the mode's time unit 1/omega (v stands for v / omega): x' = x + h v,
-    // v' = v - h x' - hc v - (ratio / n) v0, with v0 carried along unchanged.
-    let a = Matrix3::new(
-        1.0,
-        h,
-        0.0,
-        -h,
-        1.0 - h * h - hc,
-        -ratio / n as f64,
-        0.0,
-        0.0,
-        1.0,
-    );
-    let p = power(a, n);
-    let b = Matrix2::new(
-        p[(0, 0)],
-        p[(0, 1)] + p[(0, 2)],
-        p[(1, 0)],
-        p[(1, 1)] + p[(1, 2)],
-    );
-    spectral_radius(&b)
+/// The most elastic modes [`CoupledModes`] keeps (the fastest): a dense eigenproblem of
+/// twice as many unknowns per fluid step it evaluates.
+pub const MAX_COUPLED_MODES: usize = 48;
+
+/// The fibre's elastic modes and how the exchange's drag couples them (module
+/// documentation, "Every mode at once"): the fastest [`MAX_COUPLED_MODES`] modes of
+/// `M^{-1/2} K M^{-1/2}` ([`crate::stability::mass_weighted_stiffness_matrix`]) and the
+/// profile-to-bead ratios in their basis, `C = Q^T R Q` (`R`: `r_m` on each translation,
+/// `r_I` on each rotation).
+#[derive(Debug, Clone)]
+pub struct CoupledModes {
+    /// `ω²` of each mode.
+    omega2: Vec<f64>,
+    /// `Q^T R Q`.
+    coupling: DMatrix<f64>,
+    /// The larger of the two ratios, `max(r_m, r_I)`.
+    largest_ratio: f64,
 }
 
-fn power(mut a: Matrix3<f64>, mut n: usize) -> Matrix3<f64> {
-    let mut p = Matrix3::identity();
-    while n > 0 {
-        if n & 1 == 1 {
-            p *= a;
+impl CoupledModes {
+    /// The modes of `fibre` with its fastest raised to `omega_max` (the power iteration's,
+    /// over the whole fibre: a fibre longer than [`crate::stability::MAX_MODE_BEADS`] is
+    /// decomposed on its first beads) and the ratios `r` of its profiles to its beads.
+    pub fn new(fibre: &Fibre, omega_max: f64, r: ExchangeRatios) -> Self {
+        let (a, rotation) = mass_weighted_stiffness_matrix(fibre);
+        Self::from_matrix(a, &rotation, omega_max, r)
+    }
+
+    fn from_matrix(a: DMatrix<f64>, rotation: &[bool], omega_max: f64, r: ExchangeRatios) -> Self {
+        let largest_ratio = r.mass.max(r.inertia);
+        let eig = a.symmetric_eigen();
+        let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
+        let mut order: Vec<usize> = (0..eig.eigenvalues.len())
+            .filter(|&j| top > 0.0 && eig.eigenvalues[j] > 1e-9 * top)
+            .collect();
+        order.sort_by(|&i, &j| eig.eigenvalues[j].total_cmp(&eig.eigenvalues[i]));
+        order.truncate(MAX_COUPLED_MODES);
+        let raise = if top > 0.0 {
+            (omega_max * omega_max / top).max(1.0)
+        } else {
+            1.0
+        };
+        let q = DMatrix::from_fn(rotation.len(), order.len(), |i, j| {
+            eig.eigenvectors[(i, order[j])]
+        });
+        let ratio = |i: usize| if rotation[i] { r.inertia } else { r.mass };
+        let coupling = DMatrix::from_fn(order.len(), order.len(), |i, j| {
+            (0..rotation.len())
+                .map(|d| q[(d, i)] * ratio(d) * q[(d, j)])
+                .sum()
+        });
+        Self {
+            omega2: order.iter().map(|&j| eig.eigenvalues[j] * raise).collect(),
+            coupling,
+            largest_ratio,
         }
-        a = a * a;
-        n >>= 1;
     }
-    p
-}
 
-fn spectral_radius(b: &Matrix2<f64>) -> f64 {
-    let tr = b[(0, 0)] + b[(1, 1)];
-    let det = b[(0, 0)] * b[(1, 1)] - b[(0, 1)] * b[(1, 0)];
-    let disc = tr * tr - 4.0 * det;
-    if disc < 0.0 {
-        det.abs().sqrt()
-    } else {
-        let s = disc.sqrt();
-        (0.5 * (tr + s)).abs().max((0.5 * (tr - s)).abs())
+    /// The fastest mode's angular frequency.
+    pub fn omega_max(&self) -> f64 {
+        self.omega2.first().map_or(0.0, |w| w.sqrt())
     }
-}
 
-/// The first fluid step `dt` at which a mode of frequency `omega` grows under the model,
-/// with the mass-proportional damping rate `damping` and the coupling `k r = ratio`,
-/// searched up to `min(MAX_OMEGA_DT, omega below)` in `ω dt`; `None` if it is stable there.
-pub fn first_unstable_step(
-    omega: f64,
-    damping: f64,
-    ratio: f64,
-    substeps: usize,
-    below: f64,
-) -> Option<f64> {
-    let grows = |x: f64| one_mode_growth(x, damping * x / omega, ratio, substeps) > 1.0 + 1e-9;
-    let end = MAX_OMEGA_DT.min(omega * below);
-    let dx = MAX_OMEGA_DT / SCAN_POINTS as f64;
-    let mut lo = 0.0;
-    while lo < end {
-        let x = (lo + dx).min(end);
-        if grows(x) {
-            let mut hi = x;
-            for _ in 0..60 {
-                let mid = 0.5 * (lo + hi);
-                if grows(mid) {
-                    hi = mid;
-                } else {
-                    lo = mid;
-                }
+    /// The largest profile-to-bead ratio, `max(r_m, r_I)`.
+    pub fn largest_ratio(&self) -> f64 {
+        self.largest_ratio
+    }
+
+    /// The same fibre with beads `f` times as dense: every ratio divided by `f`, every
+    /// `ω²` too.
+    fn heavier(&self, f: f64) -> Self {
+        Self {
+            omega2: self.omega2.iter().map(|w| w / f).collect(),
+            coupling: &self.coupling / f,
+            largest_ratio: self.largest_ratio / f,
+        }
+    }
+
+    /// Spectral radius of one fluid step `dt` of every mode at once (module documentation):
+    /// `n = substeps` sub-steps of position-first symplectic Euler with the damping rate
+    /// `c + tau ω²` per mode (`c = damping`, `tau = internal_damping`), each given the
+    /// share `1 / n` of the drag `−k C v0` (`k = share`, `v0`: the velocities at the step's
+    /// start).
+    pub fn growth(
+        &self,
+        dt: f64,
+        (damping, internal_damping): (f64, f64),
+        share: f64,
+        substeps: usize,
+    ) -> f64 {
+        let m = self.omega2.len();
+        if m == 0 {
+            return 0.0;
+        }
+        let n = substeps.max(1);
+        let h = dt / n as f64;
+        // One sub-step on (x, v, v0).
+        let mut s = DMatrix::<f64>::zeros(3 * m, 3 * m);
+        for (i, &w2) in self.omega2.iter().enumerate() {
+            let c = damping + internal_damping * w2;
+            s[(i, i)] = 1.0;
+            s[(i, m + i)] = h;
+            s[(m + i, i)] = -h * w2;
+            s[(m + i, m + i)] = 1.0 - h * h * w2 - h * c;
+            s[(2 * m + i, 2 * m + i)] = 1.0;
+            for j in 0..m {
+                s[(m + i, 2 * m + j)] = -share * self.coupling[(i, j)] / n as f64;
             }
-            return Some(lo / omega);
         }
-        lo = x;
+        let mut p = s.clone();
+        for _ in 1..n {
+            p = &s * &p;
+        }
+        // v0 = v at the step's start; keep (x, v).
+        let b = DMatrix::from_fn(2 * m, 2 * m, |i, j| {
+            p[(i, j)] + if j >= m { p[(i, m + j)] } else { 0.0 }
+        });
+        spectral_radius_of(b)
     }
-    None
+
+    /// The first fluid step at which some mode grows (scanned in steps of 0.01 in
+    /// `ω_max dt`, then bisected), searched up to `min(MAX_OMEGA_DT / ω_max, below)`;
+    /// `None` if the fibre is stable that far.
+    pub fn first_unstable_step(
+        &self,
+        damping: (f64, f64),
+        share: f64,
+        substeps: usize,
+        below: f64,
+    ) -> Option<f64> {
+        let w = self.omega_max();
+        if w <= 0.0 {
+            return None;
+        }
+        let grows = |dt: f64| self.growth(dt, damping, share, substeps) > 1.0 + 1e-9;
+        let end = (MAX_OMEGA_DT / w).min(below);
+        let dx = MAX_OMEGA_DT / SCAN_POINTS as f64 / w;
+        let mut lo = 0.0;
+        while lo < end {
+            let x = (lo + dx).min(end);
+            if grows(x) {
+                let mut hi = x;
+                for _ in 0..50 {
+                    let mid = 0.5 * (lo + hi);
+                    if grows(mid) {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                }
+                return Some(lo);
+            }
+            lo = x;
+        }
+        None
+    }
+
+    /// The largest growth per fluid step for the fluid steps from `dt` to `dt / SAFETY`
+    /// (nine of them, evenly spaced). Above 1 the scene's step, or one within the margin
+    /// above it, lets the fibre grow.
+    pub fn largest_growth(
+        &self,
+        damping: (f64, f64),
+        (substeps, share): (usize, f64),
+        dt: f64,
+    ) -> f64 {
+        (0..9)
+            .map(|j| {
+                let h = dt * (1.0 + (1.0 / SAFETY - 1.0) * j as f64 / 8.0);
+                self.growth(h, damping, share, substeps)
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Spectral radius of a real square matrix (its Schur form; power iteration should that not
+/// converge).
+fn spectral_radius_of(b: DMatrix<f64>) -> f64 {
+    if let Some(schur) = nalgebra::linalg::Schur::try_new(b.clone(), 1e-14, 20_000) {
+        return schur
+            .complex_eigenvalues()
+            .iter()
+            .map(|z| z.norm())
+            .fold(0.0, f64::max);
+    }
+    let mut v = nalgebra::DVector::from_fn(b.nrows(), |i, _| 1.0 + 0.1 * (i % 7) as f64);
+    let mut g = 0.0;
+    for _ in 0..2000 {
+        let w = &b * &v;
+        let (nw, nv) = (w.norm(), v.norm());
+        if nw == 0.0 {
+            return 0.0;
+        }
+        g = nw / nv;
+        v = w / nw;
+    }
+    g
 }
 
 /// The explicit exchange's stiffness limit of one fibre: its first instability.
@@ -383,76 +586,27 @@ pub struct ExchangeStiffnessLimit {
     /// The largest `time.dt` accepted below it: [`SAFETY`] times the model's first
     /// instability.
     pub dt_limit: f64,
-    /// The mode that binds.
-    pub mode: NormalMode,
-    /// Its coupling `k r` (module documentation).
-    pub ratio: f64,
-    /// `ω dt` at which the model lets it grow.
+    /// The fibre's fastest mode's angular frequency.
+    pub omega_max: f64,
+    /// `ω_max dt` at which the model lets the fibre grow.
     pub omega_dt: f64,
 }
 
-/// A mode's coupling `k r`: the flow's share times the profile-to-bead ratios weighted by
-/// where its kinetic energy lies.
-fn mode_ratio(m: &NormalMode, ratios: ExchangeRatios, share: f64) -> f64 {
-    share * (m.translation * ratios.mass + (1.0 - m.translation) * ratios.inertia)
-}
-
-/// The limit over the fibre's `modes` (fastest first, [`crate::stability::normal_modes`]),
-/// for beads whose profiles hold `ratios` of their mass and moment of inertia, damping rate
-/// `damping`, Kelvin-Voigt time `internal_damping` (a mode's rate is `c + tau omega^2`) and
-/// `substeps`. `None` if no mode grows below `MAX_OMEGA_DT`.
+/// The first instability of `modes` with `damping` (mass-proportional rate, Kelvin-Voigt
+/// time), `substeps` and the flow's share `share`; `None` if none below `MAX_OMEGA_DT`.
 pub fn limit(
-    modes: &[NormalMode],
-    ratios: ExchangeRatios,
-    damping: f64,
-    internal_damping: f64,
+    modes: &CoupledModes,
+    damping: (f64, f64),
     substeps: usize,
     share: f64,
 ) -> Option<ExchangeStiffnessLimit> {
-    let mut best: Option<(f64, NormalMode, f64)> = None;
-    for m in modes {
-        let ratio = mode_ratio(m, ratios, share);
-        let c = damping + internal_damping * m.omega * m.omega;
-        let below = best.map_or(f64::INFINITY, |b| b.0);
-        if let Some(dt) = first_unstable_step(m.omega, c, ratio, substeps, below) {
-            if dt < below {
-                best = Some((dt, *m, ratio));
-            }
-        }
-    }
-    best.map(|(dt, mode, ratio)| ExchangeStiffnessLimit {
-        dt_limit: SAFETY * dt,
-        mode,
-        ratio,
-        omega_dt: mode.omega * dt,
-    })
-}
-
-/// The largest growth per fluid step of any mode for the fluid steps from `dt` to
-/// `dt / SAFETY` (nine of them, evenly spaced) with the flow's share `share`
-/// ([`flow_share`]), and the mode it is of.
-/// Above 1 the scene's step, or one within the margin above it, lets that mode grow.
-pub fn largest_growth(
-    modes: &[NormalMode],
-    ratios: ExchangeRatios,
-    damping: f64,
-    internal_damping: f64,
-    (substeps, share): (usize, f64),
-    dt: f64,
-) -> Option<(f64, NormalMode)> {
-    let mut worst: Option<(f64, NormalMode)> = None;
-    for m in modes {
-        let ratio = mode_ratio(m, ratios, share);
-        let c = damping + internal_damping * m.omega * m.omega;
-        for j in 0..9 {
-            let h = dt * (1.0 + (1.0 / SAFETY - 1.0) * j as f64 / 8.0);
-            let g = one_mode_growth(m.omega * h, c * h, ratio, substeps);
-            if worst.is_none_or(|w| g > w.0) {
-                worst = Some((g, *m));
-            }
-        }
-    }
-    worst
+    modes
+        .first_unstable_step(damping, share, substeps, f64::INFINITY)
+        .map(|dt| ExchangeStiffnessLimit {
+            dt_limit: SAFETY * dt,
+            omega_max: modes.omega_max(),
+            omega_dt: modes.omega_max() * dt,
+        })
 }
 
 /// What the model says of a fibre at the scene's fluid step ([`check`]).
@@ -483,12 +637,12 @@ impl ExchangeStiffness {
             return None;
         };
         Some(format!(
-            "{p}: under the explicit SPM momentum exchange its mode of omega = {:.6e} grows \
-             from time.dt = {:.6e} (omega dt = {:.3}); at this time.dt the fibre's damping \
+            "{p}: under the explicit SPM momentum exchange its modes (the fastest of omega = \
+             {:.6e}) grow from time.dt = {:.6e} (omega dt = {:.3}); at this time.dt the fibre's damping \
              ({p}.damping, {p}.internal_damping) holds every mode again, so it runs, but a \
              smaller time.dt or less damping may not (docs/validation/spm.md, \"The explicit \
              exchange's stiffness limit\")",
-            l.mode.omega,
+            l.omega_max,
             l.dt_limit / SAFETY,
             l.omega_dt
         ))
@@ -496,65 +650,54 @@ impl ExchangeStiffness {
 }
 
 /// The explicit exchange's stiffness check of `fibre` (free beads; ratios `r` of its
-/// profiles to its beads) at the fluid step `dt`: every mode must stay bounded from `dt` to
-/// `dt / SAFETY` ([`largest_growth`]), else the refusal names the mode, the limit and the
-/// cures. `p` is the key prefix (`fibre.N`); `omega_max` the power iteration's (over the
-/// whole fibre), to which the modes are raised where a long fibre's first
-/// [`crate::stability::MAX_MODE_BEADS`] beads fall short of it.
+/// profiles to its beads) at the fluid step `dt`, whose diffusion number `nu dt / xi^2` is
+/// `diffusion`: the fibre's modes must stay bounded from `dt` to `dt / SAFETY`
+/// ([`CoupledModes::largest_growth`]) with the flow's share [`share`], else the refusal
+/// names the limit and the cures. `p` is the key prefix (`fibre.N`); `omega_max` the power
+/// iteration's (over the whole fibre), to which the modes are raised where a long fibre's
+/// first [`crate::stability::MAX_MODE_BEADS`] beads fall short of it.
 pub fn check(
     p: &str,
     (fibre, density): (&Fibre, f64),
     omega_max: f64,
     r: ExchangeRatios,
-    (dt, share): (f64, f64),
+    (dt, diffusion): (f64, Option<f64>),
 ) -> Result<ExchangeStiffness, String> {
-    let mut modes = normal_modes(fibre);
-    if let Some(top) = modes.first().map(|m| m.omega) {
-        let raise = (omega_max / top).max(1.0);
-        modes.iter_mut().for_each(|m| m.omega *= raise);
-    }
+    let modes = CoupledModes::new(fibre, omega_max, r);
+    let k = share(diffusion, modes.largest_ratio());
     let (c, n) = (fibre.damping, fibre.substeps);
-    let growth = |tau: f64| largest_growth(&modes, r, c, tau, (n, share), dt);
-    let lim = limit(&modes, r, c, fibre.internal_damping, n, share);
-    let worst = growth(fibre.internal_damping);
-    let Some((g, mode)) = worst.filter(|w| w.0 > 1.0 + 1e-9) else {
+    let growth = |tau: f64| modes.largest_growth((c, tau), (n, k), dt);
+    let lim = limit(&modes, (c, fibre.internal_damping), n, k);
+    let g = growth(fibre.internal_damping);
+    if g <= 1.0 + 1e-9 {
         return Ok(match lim {
             None => ExchangeStiffness::Unlimited,
             Some(l) if dt <= l.dt_limit => ExchangeStiffness::Within(l),
             Some(l) => ExchangeStiffness::AboveInStableWindow(l),
         });
-    };
+    }
     // The Kelvin-Voigt time that lets the exchange and the fibre's own step run at dt.
     let damping = (0..=48)
-        .map(|k| dt * 10f64.powf(-4.0 + k as f64 / 8.0))
+        .map(|j| dt * 10f64.powf(-4.0 + j as f64 / 8.0))
         .filter(|&tau| tau > fibre.internal_damping)
         .find(|&tau| {
             let own = stable_step(omega_max, c + tau * omega_max * omega_max);
-            own * STEP_SAFETY * n as f64 >= dt && growth(tau).is_none_or(|w| w.0 <= 1.0)
+            own * STEP_SAFETY * n as f64 >= dt && growth(tau) <= 1.0
         })
         .map_or(String::new(), |tau| {
             format!(", give the bonds internal damping ({p}.internal_damping = {tau:.3e} or more)")
         });
     // Heavier beads: f times the density divides every ratio by f and every mode's omega by
     // sqrt f (the beads' mass and moment of inertia both grow with it, bead_inertia "solid"
-    // or "profile"), which also relaxes the fibre's own step.
+    // or "profile"), which also relaxes the fibre's own step; the flow's share is taken
+    // again for the lighter profiles.
     let carries = |f: f64| {
         let (w, tau) = (omega_max / f.sqrt(), fibre.internal_damping);
         let own = stable_step(w, c + tau * w * w);
-        let slower: Vec<_> = modes
-            .iter()
-            .map(|m| NormalMode {
-                omega: m.omega / f.sqrt(),
-                ..*m
-            })
-            .collect();
-        let lighter = ExchangeRatios {
-            mass: r.mass / f,
-            inertia: r.inertia / f,
-        };
+        let heavier = modes.heavier(f);
+        let k = share(diffusion, heavier.largest_ratio());
         own * STEP_SAFETY * n as f64 >= dt
-            && largest_growth(&slower, lighter, c, tau, (n, share), dt)
-                .is_none_or(|w| w.0 <= 1.0 + 1e-9)
+            && heavier.largest_growth((c, tau), (n, k), dt) <= 1.0 + 1e-9
     };
     // The first of 5 % steps that carries the fibre, then bisected down to 0.01 % (a factor
     // that passes is kept).
@@ -580,28 +723,26 @@ pub fn check(
         });
     let lower = lim.map_or(String::new(), |l| {
         format!(
-            ", lower time.dt to at most {:.6e} (the first instability, omega dt = {:.3} of its \
-             mode of omega = {:.6e}, times {SAFETY}) or scale all of the fibre's stiffnesses by \
-             at most {:.4e}",
+            ", lower time.dt to at most {:.6e} (the first instability, omega_max dt = {:.3}, \
+             times {SAFETY}) or scale all of the fibre's stiffnesses by at most {:.4e}",
             l.dt_limit,
             l.omega_dt,
-            l.mode.omega,
             (l.dt_limit / dt).powi(2)
         )
     });
     Err(format!(
         "{p} is too stiff for the explicit SPM momentum exchange at time.dt = {dt:?}: the \
          fluid's impulse, taken once a step at the velocity of the step's start (L2020 eqs. \
-         35-36), feeds its mode of omega = {:.6e} (omega dt = {:.3}; {:.0} % of its kinetic \
-         energy in translation, flow share times profile-to-bead ratio k r = {:.3}), which \
-         grows by {g:.4} a step at this time.dt or up to {:.0} % above it (a one-mode model \
-         with the flow share k = {share} for this nu dt / xi^2, docs/validation/spm.md \
+         35-36), feeds its modes (the fastest of omega = {:.6e}, omega dt = {:.3}; \
+         profile-to-bead ratios {:.3} in mass, {:.3} in moment of inertia), which grow by \
+         {g:.4} a step at this time.dt or up to {:.0} % above it (a model of every mode \
+         with the flow share k = {k:.4} for this nu dt / xi^2, docs/validation/spm.md \
          \"The explicit exchange's stiffness limit\"); set {p}.exchange = \"implicit\" (no \
          such limit){damping}{heavier}{lower}",
-        mode.omega,
-        mode.omega * dt,
-        100.0 * mode.translation,
-        mode_ratio(&mode, r, share),
+        modes.omega_max(),
+        modes.omega_max() * dt,
+        r.mass,
+        r.inertia,
         100.0 * (1.0 / SAFETY - 1.0),
     ))
 }
@@ -613,23 +754,25 @@ mod tests {
     use crate::quaternion::Vec3;
     use crate::spm_exchange::ratios;
 
-    /// The fibre of a measured case at Young's modulus `e`: its modes and profile-to-bead
-    /// ratios.
-    fn case(t: &MeasuredThreshold, e: f64) -> (Vec<NormalMode>, ExchangeRatios) {
+    /// The fibre of a measured case at Young's modulus `e`: its coupled modes.
+    fn case(t: &MeasuredThreshold, e: f64) -> CoupledModes {
         let (f, r) = case_fibre(t, e, "");
-        (normal_modes(&f), r)
+        let omega_max = crate::stability::stability_limit(&f, t.substeps).omega_max;
+        CoupledModes::new(&f, omega_max, r)
     }
 
-    /// The flow share at which the model's first instability (less the margin) falls on
-    /// the measured threshold `t` (at the geometric mean of its two moduli), by bisection.
+    /// The flow share at which the model's first instability falls on the measured
+    /// threshold `t` (at the geometric mean of its two moduli), by bisection.
     fn implied_share(t: &MeasuredThreshold) -> f64 {
-        let (modes, r) = case(t, (t.runs * t.fails).sqrt());
+        let modes = case(t, (t.runs * t.fails).sqrt());
         let model = |k: f64| {
-            limit(&modes, r, 0.0, 0.0, t.substeps, k).map_or(f64::INFINITY, |l| l.dt_limit / SAFETY)
+            modes
+                .first_unstable_step((0.0, 0.0), k, t.substeps, 2.0 * t.dt)
+                .unwrap_or(f64::INFINITY)
         };
         // The model's limit falls with k, to none at all past the light-bead limit k r = 2.
         let (mut lo, mut hi) = (0.0, 1.5);
-        for _ in 0..60 {
+        for _ in 0..40 {
             let mid = 0.5 * (lo + hi);
             if model(mid) > t.dt {
                 lo = mid
@@ -640,28 +783,36 @@ mod tests {
         lo
     }
 
+    /// The step the check accepts for `t` at its measured failing modulus over the
+    /// measured step.
+    fn accepted(t: &MeasuredThreshold) -> f64 {
+        let modes = case(t, (t.runs * t.fails).sqrt());
+        let k = t.share_of(&modes);
+        limit(&modes, (0.0, 0.0), t.substeps, k).map_or(f64::INFINITY, |l| l.dt_limit / t.dt)
+    }
+
     #[test]
     #[ignore = "exploration: prints the flow share each measured threshold implies"]
     fn implied_flow_shares() {
         for t in MEASURED_THRESHOLDS.iter().chain(&HELD_OUT_THRESHOLDS) {
-            let e = (t.runs * t.fails).sqrt();
-            let (modes, r) = case(t, e);
-            let lo = implied_share(t);
-            let l1 = limit(&modes, r, 0.0, 0.0, t.substeps, 1.0).unwrap();
-            let acc = limit(&modes, r, 0.0, 0.0, t.substeps, t.share()).unwrap();
+            let modes = case(t, (t.runs * t.fails).sqrt());
+            let (f, r) = case_fibre(t, t.runs, "");
+            let k = implied_share(t);
             println!(
-                "{} {}D N={} r_b={} xi={} rho={} n={} dt={} (nu dt/xi^2 {}): omega_max dt = {:.3}, k = {:.3}; k=1: limit omega dt {:.3} (mode omega dt at scene {:.3}, s {:.3}, kr {:.3}); the check (k = {:.4}) accepts omega_max dt {:.3} = {:.3} of the measured",
-                t.model, t.dimensions, t.beads, t.bead_radius, t.xi, t.density, t.substeps, t.dt, t.diffusion_number(), modes[0].omega * t.dt, lo,
-                modes[0].omega * l1.dt_limit / SAFETY, l1.mode.omega * t.dt, l1.mode.translation, l1.ratio,
-                t.share(), modes[0].omega * acc.dt_limit, acc.dt_limit / t.dt
+                "{}D {} N={} r_b={} xi={} rho={} n={} dt={} nu={} (nu dt/xi^2 {}): omega_max dt = {:.3}, r_m {:.3} r_I {:.3}; implied k = {:.4}, k r_max = {:.4}; the check (k = {:.4}) accepts {:.3} of the measured step",
+                t.dimensions, t.model, t.beads, t.bead_radius, t.xi, t.density, t.substeps, t.dt, t.viscosity, t.diffusion_number(),
+                modes.omega_max() * t.dt, r.mass, r.inertia, k, k * r.mass.max(r.inertia), t.share_of(&modes), accepted(t)
             );
+            let _ = f;
         }
     }
 
     /// The share steps up above the calibrated diffusion number and grows along the ramp,
+    /// the cap on light beads' coupling grows towards 2, and the share the check takes is
     /// never below the share any measured threshold implies at its diffusion number (the
-    /// smallest margins: 0.982 at 5 against 0.985, 1.012 at 10 against 1.015, 1.024 at 20
-    /// against 1.025, 1.026 at 40 against 1.027).
+    /// smallest margins are the four-bead density-1.0 cases under the cap: k r_I 1.9223 at 5
+    /// against 1.93, 1.9562 at 10 against 1.96, 1.9736 at 20 against 1.976, 1.9822 at 40
+    /// against 1.984).
     #[test]
     fn the_flow_share_grows_with_the_diffusion_number() {
         assert_eq!(flow_share(Some(0.25)), FLOW_SHARE);
@@ -675,6 +826,13 @@ mod tests {
         assert_eq!(flow_share(Some(40.0)), 1.027);
         assert!((flow_share(Some(80.0)) - 1.037).abs() < 1e-12);
         assert_eq!(flow_share(None), 1.027);
+        assert_eq!(coupling_cap(Some(2.4)), f64::INFINITY);
+        assert_eq!(coupling_cap(Some(5.0)), 1.93);
+        assert!((coupling_cap(Some(80.0)) - 1.992).abs() < 1e-12);
+        assert_eq!(coupling_cap(None), 1.984);
+        // Heavy beads keep the share, light ones are capped.
+        assert_eq!(share(Some(5.0), 1.5), 0.985);
+        assert!((share(Some(5.0), 1.985) - 1.93 / 1.985).abs() < 1e-12);
         let mut last = 0.0;
         for i in 0..=200 {
             let k = flow_share(Some(0.06 * i as f64));
@@ -684,27 +842,43 @@ mod tests {
         let mut above = 0;
         for t in MEASURED_THRESHOLDS.iter().chain(&HELD_OUT_THRESHOLDS) {
             let implied = implied_share(t);
+            let k = t.share_of(&case(t, (t.runs * t.fails).sqrt()));
             assert!(
-                implied <= t.share(),
-                "{t:?}: implies {implied}, the check takes {}",
-                t.share()
+                implied <= k,
+                "{t:?}: implies {implied}, the check takes {k}"
             );
             above += usize::from(t.diffusion_number() > FLOW_SHARE_RAMP[0].0);
         }
         assert_eq!(
-            above, 17,
-            "the measured cases above 2.5: eight at 5, four at 10, three at 20, two at 40"
+            above, 24,
+            "the measured cases above 2.5: eleven at 5, five at 10, five at 20, three at 40"
         );
     }
 
-    /// One sub-step matches the closed form: `B = [[1, x], [−x, 1 − x² − r]]` with `x = ω dt`
-    /// has `det = 1 − r` and `tr = 2 − x² − r`, and Jury's condition `|tr| <= 1 + det` puts
-    /// the first instability at `x = sqrt(4 − 2 r)`.
+    /// A single mode of frequency `omega` coupled with the ratio `r` (a translation).
+    fn one_mode(omega: f64, r: f64) -> CoupledModes {
+        let ratios = ExchangeRatios {
+            mass: r,
+            inertia: 0.0,
+        };
+        CoupledModes::from_matrix(
+            DMatrix::from_element(1, 1, omega * omega),
+            &[false],
+            omega,
+            ratios,
+        )
+    }
+
+    /// One mode and one sub-step match the closed form: `B = [[1, x], [−x, 1 − x² − r]]`
+    /// with `x = ω dt` has `det = 1 − r` and `tr = 2 − x² − r`, and Jury's condition
+    /// `|tr| <= 1 + det` puts the first instability at `x = sqrt(4 − 2 r)`.
     #[test]
     fn one_sub_step_matches_the_closed_form() {
         for r in [0.0, 0.1, 0.5, 1.0, 1.5, 1.9] {
             let omega = 2.5;
-            let dt = first_unstable_step(omega, 0.0, r, 1, f64::INFINITY).unwrap();
+            let dt = one_mode(omega, r)
+                .first_unstable_step((0.0, 0.0), 1.0, 1, f64::INFINITY)
+                .unwrap();
             let exact = (4.0 - 2.0 * r).sqrt();
             assert!(
                 // The growth tolerance, 1e-9, moves the crossing by as much.
@@ -714,12 +888,16 @@ mod tests {
             );
         }
         // At r >= 2 the drag alone overshoots: no stable step.
-        assert!(first_unstable_step(1.0, 0.0, 2.1, 4, f64::INFINITY).unwrap() < 1e-2);
+        let light = one_mode(1.0, 2.1).first_unstable_step((0.0, 0.0), 1.0, 4, f64::INFINITY);
+        assert!(light.unwrap() < 1e-2);
         // Damping only raises it.
-        let (plain, damped) = (
-            first_unstable_step(1.0, 0.0, 1.0, 4, f64::INFINITY).unwrap(),
-            first_unstable_step(1.0, 0.5, 1.0, 4, f64::INFINITY).unwrap(),
-        );
+        let m = one_mode(1.0, 1.0);
+        let plain = m
+            .first_unstable_step((0.0, 0.0), 1.0, 4, f64::INFINITY)
+            .unwrap();
+        let damped = m
+            .first_unstable_step((0.5, 0.0), 1.0, 4, f64::INFINITY)
+            .unwrap();
         assert!(damped > plain, "{damped} vs {plain}");
     }
 
@@ -768,26 +946,29 @@ mod tests {
 
     /// The fibre's own integrator (sub-steps, predictor-corrector, the impulse spread over
     /// the sub-steps) fed the explicit exchange's drag goes unstable where the model says.
-    /// A bead-spring chain has translational modes only, so each mode's ratio is exactly the
-    /// mass ratio and the model is exact (tolerance 1 %, the bisection's and growth
-    /// detection's resolution). A cohesive beam's modes mix translation and rotation, which
-    /// the drag treats with different ratios; the model weights them by the mode's kinetic
-    /// energy (module documentation) and is approximate (tolerance 5 %).
+    /// A bead-spring chain's coordinates are all translations: the model is exact (0.01 %
+    /// here; tolerance 1 %, the bisection's and growth detection's resolution). A cohesive
+    /// beam's modes mix translation and rotation, which the drag treats with different
+    /// ratios; the model carries every mode and the drag's coupling between them, and
+    /// lies within 0.3 % of the beam at density 1.5 and 1.9 % above it at density 1.0
+    /// (rotational ratio 1.59, nearer the light-bead limit, where the beam's own rotation
+    /// update, not modelled, moves the threshold most); tolerance 2.5 %.
     #[test]
     fn the_fibre_integrator_goes_unstable_where_the_model_says() {
         for (model, substeps, density, tolerance) in [
             ("bead-spring", 4, 1.0, 0.01),
             ("bead-spring", 1, 1.5, 0.01),
-            ("cohesive-beam", 4, 1.5, 0.05),
-            ("cohesive-beam", 5, 1.0, 0.05),
+            ("cohesive-beam", 4, 1.5, 0.025),
+            ("cohesive-beam", 5, 1.0, 0.025),
         ] {
             let t = MeasuredThreshold {
                 model,
                 ..beam(2, 4, density, substeps, 1.0, [100.0, 100.0], 0)
             };
             let (f, r) = case_fibre(&t, 100.0, "");
-            let modes = normal_modes(&f);
-            let predicted = limit(&modes, r, 0.0, 0.0, substeps, 1.0).unwrap();
+            let omega_max = crate::stability::stability_limit(&f, substeps).omega_max;
+            let modes = CoupledModes::new(&f, omega_max, r);
+            let predicted = limit(&modes, (0.0, 0.0), substeps, 1.0).unwrap();
             let predicted = predicted.dt_limit / SAFETY;
             let measured = measured_threshold(
                 &f,
@@ -827,7 +1008,13 @@ mod tests {
     fn check_case(t: &MeasuredThreshold, e: f64, extra: &str) -> Result<ExchangeStiffness, String> {
         let (f, r) = case_fibre(t, e, extra);
         let omega_max = crate::stability::stability_limit(&f, t.substeps).omega_max;
-        check("fibre.0", (&f, t.density), omega_max, r, (t.dt, t.share()))
+        check(
+            "fibre.0",
+            (&f, t.density),
+            omega_max,
+            r,
+            (t.dt, Some(t.diffusion_number())),
+        )
     }
 
     /// Whether the check accepts 60 % of the last Young's modulus of `t` that ran.
@@ -838,16 +1025,17 @@ mod tests {
         }
     }
 
-    /// The nine-bead capillary fibre (`tumbling_2d.toml` at time.dt = 2): the one case the
-    /// check is far too strict on ([`accepts_most_of_the_nine_bead_capillary_fibre`]).
-    fn nine_beads(t: &MeasuredThreshold) -> bool {
-        t.beads == 9 && t.dt == 2.0
+    /// The nine-bead fibres of density 1.0 at `nu dt / xi^2 >= 5` (`tumbling_2d.toml` and
+    /// `jeffery_rigid.toml` with nine beads): the cases the check is too strict on
+    /// ([`accepts_most_of_the_long_light_fibres`]).
+    fn long_and_light(t: &MeasuredThreshold) -> bool {
+        t.beads == 9 && t.density == 1.0 && t.diffusion_number() >= 5.0
     }
 
     /// Every measured threshold, those calibrated on and those held out: the check refuses
     /// the first Young's modulus that failed, and accepts 60 % of the last that ran (the
     /// accepted step lies 6-21 % under the measured one; 60 % in modulus is 77 % in step),
-    /// but for the nine-bead fibre below.
+    /// but for the long light fibres below.
     #[test]
     fn refuses_every_measured_failure_and_accepts_below_it() {
         for t in MEASURED_THRESHOLDS.iter().chain(&HELD_OUT_THRESHOLDS) {
@@ -856,29 +1044,28 @@ mod tests {
                 e.contains("too stiff for the explicit SPM momentum exchange"),
                 "{e}"
             );
-            if !nine_beads(t) {
+            if !long_and_light(t) {
                 accepts_most_of_the_last_run(t).unwrap();
             }
         }
     }
 
-    /// NOT met: on the nine-bead fibre of `tumbling_2d.toml` at time.dt = 2 (nu dt / xi^2 =
-    /// 5, density 1) the check accepts 66 % of the measured threshold step, 44 % of its
-    /// modulus. The share a fibre's threshold implies falls with its length there (four
-    /// beads 0.975, five 0.965, nine 0.955) while the modelled ratio r of its limiting mode
-    /// rises (1.92, 1.94, 1.97), so that k r at the threshold stays near 1.88 (at 2.5: 1.81
-    /// for four and nine beads, k 0.939 and 0.920; there the check accepts 79 %): the one-mode
-    /// model over-weights the rotation of a long fibre's fastest modes near the light-bead
-    /// limit, and the check, calibrated on four beads, refuses long fibres it could carry.
+    /// NOT met: on nine-bead fibres of density 1.0 (xi = 2) at nu dt / xi^2 = 5 to 40 the
+    /// check accepts 71-76 % of the measured threshold step, against 79-94 % on every other
+    /// case. Near the light-bead limit the coupling `k r_I` a fibre's threshold implies falls
+    /// with its length (at 5: 1.922 / 1.904 / 1.899 / 1.891 for four / five / six / nine
+    /// beads), and the cap, set by four beads, leaves long fibres less room than they have.
     #[test]
-    #[ignore = "the check is a third too strict on long fibres near the light-bead limit (docs/validation/spm.md, k grows with nu dt / xi^2)"]
-    fn accepts_most_of_the_nine_bead_capillary_fibre() {
-        let nine: Vec<_> = HELD_OUT_THRESHOLDS
+    #[ignore = "the check is a quarter too strict on long fibres near the light-bead limit (docs/validation/spm.md, \"Long fibres\")"]
+    fn accepts_most_of_the_long_light_fibres() {
+        let long: Vec<_> = HELD_OUT_THRESHOLDS
             .iter()
-            .filter(|t| nine_beads(t))
+            .filter(|t| long_and_light(t))
             .collect();
-        assert_eq!(nine.len(), 1);
-        accepts_most_of_the_last_run(nine[0]).unwrap();
+        assert_eq!(long.len(), 5);
+        for t in long {
+            accepts_most_of_the_last_run(t).unwrap();
+        }
     }
 
     /// Heavier beads are a cure the refusal names: near the light-bead limit (density 1.0,
@@ -909,7 +1096,7 @@ mod tests {
             );
             seen += 1;
         }
-        assert_eq!(seen, 10, "the density-1.0 cases at nu dt / xi^2 >= 5");
+        assert_eq!(seen, 15, "the density-1.0 cases at nu dt / xi^2 >= 5");
     }
 
     /// The hard case of docs/validation/spm.md (`tests/spm.rs::stiff_fibre_run`, k0 / (L0
@@ -926,7 +1113,7 @@ mod tests {
             "fibre.0 is too stiff for the explicit SPM momentum exchange at time.dt = 0.25",
             "fibre.0.exchange = \"implicit\"",
             "fibre.0.internal_damping = 3.334e-3 or more",
-            "lower time.dt to at most 8.187",
+            "lower time.dt to at most 8.1856",
         ] {
             assert!(e.contains(s), "{s:?} missing from: {e}");
         }

@@ -255,6 +255,18 @@ fn mass_weighted_stiffness(fibre: &Fibre) -> (nalgebra::DMatrix<f64>, Vec<Dof>) 
     (a, dofs)
 }
 
+/// `M^{-1/2} K M^{-1/2}` of the free coordinates of the fibre (of its first
+/// [`MAX_MODE_BEADS`] beads, as [`normal_modes`]), symmetrised, and whether each coordinate
+/// is a rotation.
+pub fn mass_weighted_stiffness_matrix(fibre: &Fibre) -> (nalgebra::DMatrix<f64>, Vec<bool>) {
+    let f = first_beads(fibre, MAX_MODE_BEADS);
+    let (a, dofs) = mass_weighted_stiffness(&f);
+    (
+        (&a + a.transpose()) * 0.5,
+        dofs.iter().map(|d| d.rotation).collect(),
+    )
+}
+
 /// The normal modes of the fibre about its current (initial) configuration with `ω > 0`,
 /// fastest first: of the fibre itself, or for a fibre longer than [`MAX_MODE_BEADS`] of its
 /// first `MAX_MODE_BEADS` beads with no clamps (a uniform chain's spectrum, branch by
