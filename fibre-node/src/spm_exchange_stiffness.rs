@@ -275,6 +275,17 @@ const fn viscous(viscosity: f64, t: MeasuredThreshold) -> MeasuredThreshold {
     MeasuredThreshold { viscosity, ..t }
 }
 
+/// `jeffery_rigid.toml` with `beads` beads of `density` (nine but in one case), xi = 2,
+/// xi_c = 5, viscosity 10, one sub-step, at `time.dt = dt`.
+const fn nine_at_viscosity_10(
+    beads: usize,
+    density: f64,
+    dt: f64,
+    thresholds: [f64; 2],
+) -> MeasuredThreshold {
+    viscous(10.0, wide(beam(2, beads, density, 1, dt, thresholds, 1500)))
+}
+
 /// Thresholds measured after the calibration, on what it did not see: a bead-spring chain,
 /// radius-6 beads (`configs/spm/jeffery_rigid.toml` with four beads), the wider profile of
 /// the capillary scenes (xi = 2, xi_c = 5), the three-bead 3D chain of
@@ -343,32 +354,14 @@ pub const HELD_OUT_THRESHOLDS: [MeasuredThreshold; 38] = [
         4.0,
         wide(beam(2, 4, 1.3, 4, 40.0, [0.004409, 0.004433], 1500)),
     ),
-    viscous(10.0, wide(beam(2, 9, 1.0, 1, 1.0, [0.7486, 0.7537], 1500))),
-    viscous(
-        10.0,
-        wide(beam(2, 9, 1.0, 1, 2.0, [0.11797, 0.11840], 1500)),
-    ),
-    viscous(
-        10.0,
-        wide(beam(2, 9, 1.0, 1, 4.0, [0.017567, 0.017628], 1500)),
-    ),
-    viscous(
-        10.0,
-        wide(beam(2, 9, 1.0, 1, 8.0, [0.0027039, 0.0027197], 1500)),
-    ),
-    viscous(
-        10.0,
-        wide(beam(2, 9, 1.0, 1, 16.0, [0.00048226, 0.00048530], 1500)),
-    ),
-    viscous(
-        10.0,
-        wide(beam(2, 6, 1.0, 1, 2.0, [0.12161, 0.12204], 1500)),
-    ),
-    viscous(10.0, wide(beam(2, 9, 1.3, 1, 2.0, [0.7236, 0.7265], 1500))),
-    viscous(
-        10.0,
-        wide(beam(2, 9, 1.3, 1, 8.0, [0.04063, 0.04084], 1500)),
-    ),
+    nine_at_viscosity_10(9, 1.0, 1.0, [0.7486, 0.7537]),
+    nine_at_viscosity_10(9, 1.0, 2.0, [0.11797, 0.11840]),
+    nine_at_viscosity_10(9, 1.0, 4.0, [0.017567, 0.017628]),
+    nine_at_viscosity_10(9, 1.0, 8.0, [0.0027039, 0.0027197]),
+    nine_at_viscosity_10(9, 1.0, 16.0, [0.00048226, 0.00048530]),
+    nine_at_viscosity_10(6, 1.0, 2.0, [0.12161, 0.12204]),
+    nine_at_viscosity_10(9, 1.3, 2.0, [0.7236, 0.7265]),
+    nine_at_viscosity_10(9, 1.3, 8.0, [0.04063, 0.04084]),
 ];
 
 /// Fraction of the model's limit that configure accepts.
