@@ -11,7 +11,7 @@
 //! - [`fibre_contact`]: optional excluded volume between fibres;
 //! - [`fibre_overlap`]: the `fibre_overlap` diagnostic, how deep beads of two fibres reach
 //!   into each other;
-//! - [`stability`]: the beam-stiffness time-step limit and the normal modes;
+//! - [`stability`]: the beam-stiffness time-step limit and the mass-weighted stiffness matrix;
 //! - [`spm_exchange`], [`spm_exchange_stiffness`]: light beads and stiff fibres under the
 //!   explicit SPM exchange;
 //! - [`config`]: the `[[fibre]]` part of a scene;

@@ -219,18 +219,9 @@ fn first_beads(fibre: &Fibre, n: usize) -> std::borrow::Cow<'_, Fibre> {
     std::borrow::Cow::Owned(f)
 }
 
-/// Longest chain [`normal_modes`] decomposes (a dense eigenproblem of up to 6 x 32 unknowns).
+/// Longest chain [`mass_weighted_stiffness_matrix`] forms (a dense eigenproblem of up to
+/// 6 x 32 unknowns for its modes).
 pub const MAX_MODE_BEADS: usize = 32;
-
-/// One normal mode of the linearised internal dynamics `M ü = −K u`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct NormalMode {
-    /// Angular frequency `ω`.
-    pub omega: f64,
-    /// Share of the mode's kinetic energy in the beads' translation (the rest is in their
-    /// rotation): 1 for a bead-spring chain, between 0 and 1 for a cohesive beam.
-    pub translation: f64,
-}
 
 /// Dense `M^{-1/2} K M^{-1/2}` of the fibre's free coordinates, by central finite differences
 /// of the force/torque function (symmetric up to the differencing error); and the coordinates.
@@ -255,9 +246,11 @@ fn mass_weighted_stiffness(fibre: &Fibre) -> (nalgebra::DMatrix<f64>, Vec<Dof>) 
     (a, dofs)
 }
 
-/// `M^{-1/2} K M^{-1/2}` of the free coordinates of the fibre (of its first
-/// [`MAX_MODE_BEADS`] beads, as [`normal_modes`]), symmetrised, and whether each coordinate
-/// is a rotation.
+/// `M^{-1/2} K M^{-1/2}` of the free coordinates of the fibre about its current (initial)
+/// configuration, symmetrised, and whether each coordinate is a rotation: of the fibre
+/// itself, or for a fibre longer than [`MAX_MODE_BEADS`] of its first `MAX_MODE_BEADS`
+/// beads with no clamps (a uniform chain's spectrum, branch by branch, is then sampled at
+/// 32 wavenumbers; its top lies within O(1/32²) of the full fibre's).
 pub fn mass_weighted_stiffness_matrix(fibre: &Fibre) -> (nalgebra::DMatrix<f64>, Vec<bool>) {
     let f = first_beads(fibre, MAX_MODE_BEADS);
     let (a, dofs) = mass_weighted_stiffness(&f);
@@ -265,40 +258,6 @@ pub fn mass_weighted_stiffness_matrix(fibre: &Fibre) -> (nalgebra::DMatrix<f64>,
         (&a + a.transpose()) * 0.5,
         dofs.iter().map(|d| d.rotation).collect(),
     )
-}
-
-/// The normal modes of the fibre about its current (initial) configuration with `ω > 0`,
-/// fastest first: of the fibre itself, or for a fibre longer than [`MAX_MODE_BEADS`] of its
-/// first `MAX_MODE_BEADS` beads with no clamps (a uniform chain's spectrum, branch by
-/// branch, is then sampled at 32 wavenumbers; its top lies within O(1/32²) of the full
-/// fibre's). Rigid-body modes (`ω² <= 1e-9 ω_max²`) are left out.
-pub fn normal_modes(fibre: &Fibre) -> Vec<NormalMode> {
-    let f = first_beads(fibre, MAX_MODE_BEADS);
-    let (a, dofs) = mass_weighted_stiffness(&f);
-    if dofs.is_empty() {
-        return Vec::new();
-    }
-    let eig = ((&a + a.transpose()) * 0.5).symmetric_eigen();
-    let top = eig.eigenvalues.max();
-    let mut modes: Vec<NormalMode> = (0..dofs.len())
-        .filter(|&j| eig.eigenvalues[j] > 1e-9 * top)
-        .map(|j| {
-            let v = eig.eigenvectors.column(j);
-            let translation = dofs
-                .iter()
-                .zip(v.iter())
-                .filter(|(d, _)| !d.rotation)
-                .map(|(_, x)| x * x)
-                .sum::<f64>()
-                / v.norm_squared();
-            NormalMode {
-                omega: eig.eigenvalues[j].sqrt(),
-                translation,
-            }
-        })
-        .collect();
-    modes.sort_by(|a, b| b.omega.total_cmp(&a.omega));
-    modes
 }
 
 /// The beam-stiffness limit of a fibre about its current (initial) configuration.
