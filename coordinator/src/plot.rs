@@ -343,7 +343,7 @@ pub fn regime_map(
             .y_desc(y.0)
             .label_style(("sans-serif", 15))
             .x_label_formatter(&|v| format!("{v:.2e}"))
-            .y_label_formatter(&|v| format!("{v:.2}"))
+            .y_label_formatter(&|v| fixed(*v, 2))
             .draw()
             .map_err(e)?;
         for (class, colour) in &classes {
@@ -430,7 +430,7 @@ pub fn orbit(
         .x_desc("direction theta (deg, from +x)")
         .y_desc("omega / gamma")
         .label_style(("sans-serif", 15))
-        .y_label_formatter(&|v| format!("{v:.2}"))
+        .y_label_formatter(&|v| fixed(*v, 2))
         .draw()
         .map_err(e)?;
     chart
@@ -505,7 +505,7 @@ pub fn orbit(
         .x_desc("gamma t")
         .y_desc("end-to-end / contour")
         .label_style(("sans-serif", 15))
-        .y_label_formatter(&|v| format!("{v:.3}"))
+        .y_label_formatter(&|v| fixed(*v, 3))
         .draw()
         .map_err(e)?;
     chart
@@ -632,7 +632,7 @@ pub fn metric_against(
             .x_desc(x.0)
             .y_desc(y.0)
             .label_style(("sans-serif", 15))
-            .y_label_formatter(&|v| format!("{v:.3}"))
+            .y_label_formatter(&|v| fixed(*v, 3))
             .draw()
             .map_err(e)?;
         chart
@@ -661,6 +661,17 @@ pub fn metric_against(
     Ok(())
 }
 
+/// `v` with `digits` decimals for an axis label, without the sign of a value that rounds to
+/// zero ("-0.00" where a grid line lies at a round-off below 0).
+fn fixed(v: f64, digits: usize) -> String {
+    let s = format!("{v:.digits$}");
+    if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
+        s[1..].to_string()
+    } else {
+        s
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::with_a_decade;
@@ -681,6 +692,17 @@ mod tests {
             .flat_map(|i| (0..=10).map(move |j| (0.1 * i as f64, 0.1 * j as f64)))
             .collect();
         assert!(legend_place(&grid, 4).1 > 0);
+    }
+
+    #[test]
+    fn axis_labels_drop_the_sign_of_a_rounded_zero() {
+        use super::fixed;
+        assert_eq!(fixed(-1e-17, 2), "0.00");
+        assert_eq!(fixed(-0.0, 3), "0.000");
+        assert_eq!(fixed(-0.004, 2), "0.00");
+        assert_eq!(fixed(-0.006, 2), "-0.01");
+        assert_eq!(fixed(0.2, 2), "0.20");
+        assert_eq!(fixed(-1.0, 2), "-1.00");
     }
 
     fn close(a: (f64, f64), b: (f64, f64)) -> bool {
