@@ -1,7 +1,7 @@
 //! Command-line interface. Every failure ends with one clear message and a non-zero exit
 //! code, never a panic trace.
 use clap::{Parser, Subcommand};
-use coordinator::{runner, scene, study};
+use coordinator::{export, runner, scene, study};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -84,6 +84,20 @@ enum Cmd {
         /// Check every variant as `coordinator check` does and run nothing.
         #[arg(long, conflicts_with_all = ["replot", "out", "jobs"])]
         check: bool,
+    },
+    /// Write a run's logged bead states and diagnostics as CSV (beads.csv, diagnostics.csv),
+    /// or print one topic of its log as JSON lines.
+    Export {
+        /// A run's output folder (holding run.mcap) or an MCAP file.
+        #[arg(default_value = "runs/latest")]
+        run: PathBuf,
+        /// Folder for the CSV files (default: the run's folder).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Print this topic (e.g. /fibre/bead_states, /diagnostics, /timings, /scene) as
+        /// JSON lines on standard output instead, one message a line.
+        #[arg(long, value_name = "TOPIC", conflicts_with = "out")]
+        topic: Option<String>,
     },
 }
 
@@ -232,6 +246,38 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             let report =
                 study::run_file(&study, out.as_deref(), runs).map_err(|e| e.to_string())?;
             println!("{report}");
+            Ok(())
+        }
+        Cmd::Export { run, out, topic } => {
+            let log = export::log_path(&run)?;
+            let damage = match topic {
+                Some(topic) => {
+                    use std::io::Write;
+                    let (messages, damage) = coordinator::mcap_log::salvage_topic(&log, &topic)?;
+                    if messages.is_empty() && damage.is_none() {
+                        return Err(format!("{} has no messages on {topic}", log.display()));
+                    }
+                    let mut stdout = std::io::stdout().lock();
+                    for m in messages {
+                        writeln!(stdout, "{m}").map_err(|e| format!("cannot print: {e}"))?;
+                    }
+                    damage
+                }
+                None => {
+                    let dir = out.unwrap_or_else(|| log.parent().unwrap_or(&run).to_path_buf());
+                    let done = export::export(&log, &dir)?;
+                    for (path, rows) in &done.files {
+                        println!("wrote {} ({rows} rows)", path.display());
+                    }
+                    done.damage
+                }
+            };
+            if let Some(e) = damage {
+                eprintln!(
+                    "warning: {} breaks off ({e}): exported what was logged before the break",
+                    log.display()
+                );
+            }
             Ok(())
         }
     }

@@ -1,0 +1,100 @@
+//! `coordinator export`: the CSV tables hold what the MCAP log holds, to the bit, and a log
+//! cut short is exported up to its break with a warning.
+mod common;
+use common::*;
+use coordinator::mcap_log::read_topic;
+use std::path::Path;
+
+fn rows(path: &Path) -> Vec<Vec<String>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
+}
+
+#[test]
+fn bead_and_diagnostic_tables_equal_the_log() {
+    let set = [
+        "time.steps=1000".to_string(),
+        "output.interval=100".to_string(),
+    ];
+    let out = run_scene(
+        "export",
+        &config("cantilever.toml"),
+        &set,
+        &["--in-process"],
+    )
+    .unwrap();
+    let o = coordinator(&["export", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    let log = out.join("run.mcap");
+    let states = read_topic(&log, "/fibre/bead_states").unwrap();
+    let beads = rows(&out.join("beads.csv"));
+    let columns: Vec<String> = states[0]["columns"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_str().unwrap().to_string())
+        .collect();
+    assert_eq!(beads[0][..4], ["step", "time", "fibre", "bead"]);
+    assert_eq!(beads[0][4..], columns[..]);
+    let per_message = states[0]["states"].as_array().unwrap().len();
+    assert_eq!(per_message, 10);
+    assert_eq!(beads.len() - 1, states.len() * per_message);
+    for (m, chunk) in states.iter().zip(beads[1..].chunks(per_message)) {
+        for (b, row) in chunk.iter().enumerate() {
+            assert_eq!(row[0], m["step"].to_string());
+            assert_eq!(row[3], b.to_string());
+            for (j, cell) in row[4..].iter().enumerate() {
+                let logged = m["states"][b][j].as_f64().unwrap();
+                assert_eq!(cell.parse::<f64>().unwrap().to_bits(), logged.to_bits());
+            }
+        }
+    }
+
+    let diagnostics = read_topic(&log, "/diagnostics").unwrap();
+    let table = rows(&out.join("diagnostics.csv"));
+    assert_eq!(table.len() - 1, diagnostics.len());
+    let col = |name: &str| table[0].iter().position(|h| h == name).unwrap();
+    let k = col("kinetic_energy");
+    for (m, row) in diagnostics.iter().zip(&table[1..]) {
+        assert_eq!(row[col("step")], m["step"].to_string());
+        let logged = m["kinetic_energy"].as_f64().unwrap();
+        assert_eq!(row[k].parse::<f64>().unwrap().to_bits(), logged.to_bits());
+    }
+
+    // One topic as JSON lines: the messages themselves.
+    let o = coordinator(&["export", out.to_str().unwrap(), "--topic", "/diagnostics"]);
+    assert!(o.status.success());
+    let lines: Vec<serde_json::Value> = String::from_utf8(o.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines, diagnostics);
+
+    // A log cut short (a killed run never writes the footer): what came before the break.
+    let cut = out.join("cut");
+    std::fs::create_dir_all(&cut).unwrap();
+    let bytes = std::fs::read(&log).unwrap();
+    std::fs::write(cut.join("run.mcap"), &bytes[..bytes.len() / 2]).unwrap();
+    let o = coordinator(&["export", cut.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("breaks off"), "{err}");
+    let partial = rows(&cut.join("beads.csv"));
+    assert!(
+        partial.len() > 1 && partial.len() < beads.len(),
+        "{}",
+        partial.len()
+    );
+    assert_eq!(partial[..], beads[..partial.len()]);
+
+    // Not a run: a clear error, no panic.
+    let o = coordinator(&["export", cut.join("nothing").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no run folder or MCAP file"));
+    let _ = std::fs::remove_dir_all(&out);
+}
