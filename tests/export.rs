@@ -65,6 +65,20 @@ fn bead_and_diagnostic_tables_equal_the_log() {
         assert_eq!(row[k].parse::<f64>().unwrap().to_bits(), logged.to_bits());
     }
 
+    // The scene as run (the overrides applied) runs again to the same bits.
+    let scene = out.join("scene.toml");
+    let text = std::fs::read_to_string(&scene).unwrap();
+    assert!(
+        text.contains("steps = 1000") && text.contains("interval = 100"),
+        "{text}"
+    );
+    let again = run_scene("export-again", &scene, &[], &["--in-process"]).unwrap();
+    assert_eq!(
+        read_topic(&again.join("run.mcap"), "/fibre/bead_states").unwrap(),
+        states
+    );
+    let _ = std::fs::remove_dir_all(&again);
+
     // One topic as JSON lines: the messages themselves.
     let o = coordinator(&["export", out.to_str().unwrap(), "--topic", "/diagnostics"]);
     assert!(o.status.success());

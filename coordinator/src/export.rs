@@ -6,7 +6,9 @@
 //!   velocity, angular velocity; the scene's units);
 //! - `diagnostics.csv` from `/diagnostics`: one row per logged step, `step, time` and then
 //!   every other key that any message holds, in name order (an empty cell where a message
-//!   lacks it; nested values flattened as `key.sub` and `key.0`).
+//!   lacks it; nested values flattened as `key.sub` and `key.0`);
+//! - `scene.toml` from `/scene`: the scene as run, overrides applied, which `coordinator run`
+//!   takes back to repeat the run.
 //!
 //! Numbers are written in Rust's shortest round-trip form, so a value read back is the same
 //! `f64` as the one logged.
@@ -20,6 +22,8 @@ use std::path::{Path, PathBuf};
 pub const BEAD_STATES: &str = "/fibre/bead_states";
 /// The topic `diagnostics.csv` is made from.
 pub const DIAGNOSTICS: &str = "/diagnostics";
+/// The topic `scene.toml` is taken from.
+pub const SCENE: &str = "/scene";
 
 /// The log of a run: `run` itself if it is a file, else `run/run.mcap`.
 pub fn log_path(run: &Path) -> Result<PathBuf, String> {
@@ -52,14 +56,16 @@ pub struct Exported {
     pub damage: Option<String>,
 }
 
-/// Write `beads.csv` and `diagnostics.csv` of the run log `log` into `out` (created if
-/// missing). A table whose topic the log lacks (a run without fibres) is not written.
+/// Write `beads.csv`, `diagnostics.csv` and `scene.toml` of the run log `log` into `out`
+/// (created if missing). A file whose topic the log lacks (a run without fibres) is not
+/// written.
 pub fn export(log: &Path, out: &Path) -> Result<Exported, String> {
     let mut files = Vec::new();
     let mut damage = None;
-    let tables: [(&str, &str, Table); 2] = [
+    let tables: [(&str, &str, Table); 3] = [
         (BEAD_STATES, "beads.csv", bead_states_csv),
         (DIAGNOSTICS, "diagnostics.csv", diagnostics_csv),
+        (SCENE, "scene.toml", scene_toml),
     ];
     for (topic, name, table) in tables {
         let (messages, broke) = salvage_topic(log, topic)?;
@@ -153,6 +159,14 @@ pub fn bead_states_csv(messages: &[Value]) -> Result<(String, usize), String> {
         }
     }
     Ok((text, rows))
+}
+
+/// The scene of a `/scene` message (the first; a run logs one), as TOML; its "rows" are 1.
+pub fn scene_toml(messages: &[Value]) -> Result<(String, usize), String> {
+    let toml = messages[0]["toml"]
+        .as_str()
+        .ok_or("a message without the scene's `toml`")?;
+    Ok((toml.to_string(), 1))
 }
 
 /// `/diagnostics` messages as CSV: the text and its number of data rows.

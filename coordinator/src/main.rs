@@ -85,13 +85,13 @@ enum Cmd {
         #[arg(long, conflicts_with_all = ["replot", "out", "jobs"])]
         check: bool,
     },
-    /// Write a run's logged bead states and diagnostics as CSV (beads.csv, diagnostics.csv),
-    /// or print one topic of its log as JSON lines.
+    /// Write a run's logged bead states and diagnostics as CSV (beads.csv, diagnostics.csv)
+    /// and its scene as run (scene.toml), or print one topic of its log as JSON lines.
     Export {
         /// A run's output folder (holding run.mcap) or an MCAP file.
         #[arg(default_value = "runs/latest")]
         run: PathBuf,
-        /// Folder for the CSV files (default: the run's folder).
+        /// Folder for the files (default: the run's folder).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Print this topic (e.g. /fibre/bead_states, /diagnostics, /timings, /scene) as
@@ -267,7 +267,10 @@ fn execute(cmd: Cmd) -> Result<(), String> {
                     let dir = out.unwrap_or_else(|| log.parent().unwrap_or(&run).to_path_buf());
                     let done = export::export(&log, &dir)?;
                     for (path, rows) in &done.files {
-                        println!("wrote {} ({rows} rows)", path.display());
+                        match path.extension().is_some_and(|e| e == "csv") {
+                            true => println!("wrote {} ({rows} rows)", path.display()),
+                            false => println!("wrote {}", path.display()),
+                        }
                     }
                     done.damage
                 }
