@@ -104,7 +104,7 @@ pub fn bead_states_csv(messages: &[Value]) -> Result<(String, usize), String> {
             })
             .collect()
     };
-    let names = columns(&messages[0])?;
+    let names = columns(messages.first().ok_or("no messages")?)?;
     let mut text = String::from("step,time,fibre,bead");
     for n in &names {
         text.push(',');
@@ -163,7 +163,7 @@ pub fn bead_states_csv(messages: &[Value]) -> Result<(String, usize), String> {
 
 /// The scene of a `/scene` message (the first; a run logs one), as TOML; its "rows" are 1.
 pub fn scene_toml(messages: &[Value]) -> Result<(String, usize), String> {
-    let toml = messages[0]["toml"]
+    let toml = messages.first().ok_or("no messages")?["toml"]
         .as_str()
         .ok_or("a message without the scene's `toml`")?;
     Ok((toml.to_string(), 1))
