@@ -79,6 +79,32 @@ fn bead_and_diagnostic_tables_equal_the_log() {
     );
     let _ = std::fs::remove_dir_all(&again);
 
+    // A new run into the folder removes the tables of the old log, but not the scene file
+    // it runs.
+    let o = run_command(&scene, &out)
+        .arg("--in-process")
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(scene.exists());
+    for f in ["beads.csv", "diagnostics.csv"] {
+        assert!(!out.join(f).exists(), "{f} left from the earlier run");
+    }
+    let o = run_command(&config("cantilever.toml"), &out)
+        .args([
+            "--in-process",
+            "--set",
+            "time.steps=1000",
+            "--set",
+            "output.interval=100",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(!scene.exists(), "the earlier run's scene.toml was left");
+    let o = coordinator(&["export", out.to_str().unwrap()]);
+    assert!(o.status.success());
+
     // One topic as JSON lines: the messages themselves.
     let o = coordinator(&["export", out.to_str().unwrap(), "--topic", "/diagnostics"]);
     assert!(o.status.success());

@@ -25,6 +25,27 @@ pub const DIAGNOSTICS: &str = "/diagnostics";
 /// The topic `scene.toml` is taken from.
 pub const SCENE: &str = "/scene";
 
+/// The files [`export`] writes.
+pub const FILES: [&str; 3] = ["beads.csv", "diagnostics.csv", "scene.toml"];
+
+/// Remove exported files an earlier run left in `dir`: a new run rewrites `run.mcap`, and
+/// tables from the old log next to it would pass for the new run's. `keep`, the scene file
+/// being run (an exported `scene.toml` run again into its own folder), stays.
+pub fn remove_stale(dir: &Path, keep: Option<&Path>) {
+    let same = |p: &Path| {
+        keep.is_some_and(|k| match (p.canonicalize(), k.canonicalize()) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        })
+    };
+    for f in FILES {
+        let path = dir.join(f);
+        if !same(&path) {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
 /// The log of a run: `run` itself if it is a file, else `run/run.mcap`.
 pub fn log_path(run: &Path) -> Result<PathBuf, String> {
     if run.is_dir() {
@@ -63,9 +84,9 @@ pub fn export(log: &Path, out: &Path) -> Result<Exported, String> {
     let mut files = Vec::new();
     let mut damage = None;
     let tables: [(&str, &str, Table); 3] = [
-        (BEAD_STATES, "beads.csv", bead_states_csv),
-        (DIAGNOSTICS, "diagnostics.csv", diagnostics_csv),
-        (SCENE, "scene.toml", scene_toml),
+        (BEAD_STATES, FILES[0], bead_states_csv),
+        (DIAGNOSTICS, FILES[1], diagnostics_csv),
+        (SCENE, FILES[2], scene_toml),
     ];
     for (topic, name, table) in tables {
         let (messages, broke) = salvage_topic(log, topic)?;

@@ -362,6 +362,7 @@ fn run_on_this_thread(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResul
     INTERRUPTED.store(false, Ordering::SeqCst);
     writable_dir(&opts.out)?;
     crate::orbit_report::remove_stale(&opts.out);
+    crate::export::remove_stale(&opts.out, scene.path.as_deref());
     let plan = schedule::plan(scene).map_err(fail)?;
     let mcap_path = opts.out.join("run.mcap");
     let mut log = RunLog::create(&mcap_path).map_err(fail)?;
