@@ -699,3 +699,51 @@ fn fpd_bending_is_damped_by_the_viscous_neck_between_touching_beads() {
         "SPM {spm} against FPD {t100} at r_eta 100"
     );
 }
+
+// The issue's criteria this code does not meet, kept visible: each runs the named scene and
+// asserts the criterion as issue 5 states it. Run them with `-- --ignored`.
+
+/// Issue 5: the sandwich's profile within 2 % of V0 of eq. 13 at r_eta >= 50, xi / H <= 0.01
+/// (`configs/fpd/couette_sandwich.toml`: r_eta 100, xi / H 0.01).
+#[test]
+#[ignore = "fails: couette_max_error 0.0507 at r_eta 100, xi/H 0.01; the exact diffuse-viscosity \
+            solution gives the same (test above), and sharp interfaces alone 1/(r_eta + 2); \
+            docs/validation/fpd.md, Couette sandwich"]
+fn couette_sandwich_within_two_percent_of_eq_13() {
+    let s = run_in_process(
+        &config("fpd/couette_sandwich.toml"),
+        &[],
+        "fpd-sandwich-criterion",
+    );
+    let e = s["metrics"]["couette_max_error"]["value"].as_f64().unwrap();
+    assert!(e <= 0.02, "couette_max_error {e}");
+}
+
+/// Issue 5: the rigid fibre's fitted r_c (S2023 eq. 19) between 0.10 and 0.16 at
+/// S2023's r_xi = 0.125 (`configs/fpd/jeffery_rigid.toml`, about 40 s).
+#[test]
+#[ignore = "fails: r_c 0.213 at r_xi 0.125 (the bead's hydrodynamic radius is a + 1.9 xi); \
+            0.157 at r_xi 1/128 (jeffery_rigid_sharp.toml); docs/validation/fpd.md, Rigid fibre"]
+fn rigid_fibre_aspect_ratio_within_the_issue_bounds_at_s2023_r_xi() {
+    let s = run_in_process(&config("fpd/jeffery_rigid.toml"), &[], "fpd-rc-criterion");
+    let r = s["metrics"]["effective_aspect_ratio"]["value"]
+        .as_f64()
+        .unwrap();
+    assert!((0.10..=0.16).contains(&r), "r_c {r}");
+}
+
+/// Issue 5: S2023's S-turn at K = 0.33, Re_ps = 1.5, C = 0.5
+/// (`configs/fpd/flexible_shear.toml`, d = 8, lattice Mach 0.087, about 40 s).
+#[test]
+#[ignore = "fails: orbit jeffery, the fibre folds to 0.953 of its contour (fold threshold 0.95); \
+            ~0.96 in the incompressible limit, s-turn only at lattice Mach >= 0.13; \
+            docs/validation/fpd.md, Which K gives S2023's S-turn"]
+fn k_one_third_fibre_makes_the_s_turn() {
+    let s = run_in_process(
+        &config("fpd/flexible_shear.toml"),
+        &[],
+        "fpd-s-turn-criterion",
+    );
+    let m = &s["metrics"]["orbit"];
+    assert_eq!(m["label"], "s-turn", "{m}");
+}

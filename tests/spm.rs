@@ -1004,3 +1004,67 @@ fn s2023_groups_give_the_spm_twin_the_flow_of_the_fpd_scene() {
         assert_eq!(num(d, k), num(f, k), "{k}: spm against fpd-lbm");
     }
 }
+
+// The issue's criteria this code does not meet, kept visible: each runs the named scene and
+// asserts the criterion as issue 3 states it. Run them with `-- --ignored`.
+
+/// Issue 3: L2020 Fig. 7's period within 10 % of REFERENCE.md section 2 (N_b = 3: 21.8), the
+/// run of `jeffery_period_of_a_three_bead_chain_against_2d_stokes`.
+#[test]
+#[ignore = "fails: gamma T 18.33 at N_b = 3, 15.8 % below REFERENCE.md's 21.8 (16-47 % for \
+            N_b = 3-9) and 0.2 % from the 2D Stokes chain; the table reads Harris & Pittman's \
+            law inverted; docs/validation/spm.md, The 2D reference"]
+fn jeffery_period_of_a_three_bead_chain_against_reference_md() {
+    let o: Vec<String> = [
+        "fibre.0.beads=3",
+        "walls.velocity=[-0.07465278,0.07465278]",
+        "fibre.0.youngs_modulus=6.90772569",
+        "time.steps=19428",
+        "fibre.0.start=[90.0,78.0,0.0]",
+    ]
+    .map(String::from)
+    .to_vec();
+    let s = run_in_process(
+        &config("spm/jeffery_rigid.toml"),
+        &o,
+        "spm-jeffery-reference-md",
+    );
+    let t = s["metrics"]["tumbling_period_gamma"]["value"]
+        .as_f64()
+        .unwrap();
+    assert!((t / 21.8 - 1.0).abs() < 0.10, "gamma T {t} vs 21.8");
+}
+
+/// Issue 3: at L2020's k0 / (L0 eta gamma) = 15e3 the fibre snakes (L2020 Fig. 6). The
+/// seeded start of `a_seeded_fibre_buckles_only_above_the_slender_body_threshold`, which
+/// gives a buckling instability every chance: the S-shaped seed must grow.
+#[test]
+#[ignore = "fails: the seed decays, 0.49 -> 0.02 grid spacings off the chord (2D Stokes puts \
+            the fibre at eta gamma L^4 / (E I) = 84, on the stiff side); \
+            docs/validation/spm.md, Flexible versus rigid"]
+fn l2020_flexible_fibre_snakes_at_15e3() {
+    let o: Vec<String> = [
+        "fibre.0.initial_bend=0.5",
+        "fibre.0.start=[128.58,52.22,0.0]",
+        "fibre.0.direction=[-0.7145,0.6997,0.0]",
+        "time.steps=12000",
+        "output.interval=500",
+        "analysis.metrics=[\"min_end_to_end_over_length\"]",
+    ]
+    .map(String::from)
+    .to_vec();
+    let dir = run_scene(
+        "spm-snaking-criterion",
+        &config("spm/flexible_shear.toml"),
+        &o,
+        &["--in-process"],
+    )
+    .unwrap();
+    let shape = chord_shape(&dir);
+    let seed = shape[0].0;
+    let grown = shape.iter().map(|s| s.0).fold(0.0, f64::max);
+    assert!(
+        grown > 4.0 * seed,
+        "off the chord {seed} -> at most {grown}"
+    );
+}
