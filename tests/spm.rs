@@ -628,6 +628,15 @@ fn jeffery_period(cfg: &str, o: &[&str], name: &str, stokes: f64) -> f64 {
     t
 }
 
+/// `jeffery_rigid.toml` at N_b = 3 (the overrides of docs/validation/spm.md).
+const JEFFERY_THREE_BEADS: [&str; 5] = [
+    "fibre.0.beads=3",
+    "walls.velocity=[-0.07465278,0.07465278]",
+    "fibre.0.youngs_modulus=6.90772569",
+    "time.steps=19428",
+    "fibre.0.start=[90.0,78.0,0.0]",
+];
+
 /// L2020 Fig. 7 at N_b = 3: `jeffery_rigid.toml` with the overrides of docs/validation/spm.md
 /// (180^2, r_b = 6, rho gamma L_c^2 / eta = 0.5, 19 428 steps, about 30 s): the full Jeffery
 /// period against the same rigid chain in unbounded 2D Stokes flow
@@ -635,13 +644,7 @@ fn jeffery_period(cfg: &str, o: &[&str], name: &str, stokes: f64) -> f64 {
 /// tolerance 5 %, the size of the confinement and inertia effects over N_b = 3-9 (spm.md).
 #[test]
 fn jeffery_period_of_a_three_bead_chain_against_2d_stokes() {
-    let o = [
-        "fibre.0.beads=3",
-        "walls.velocity=[-0.07465278,0.07465278]",
-        "fibre.0.youngs_modulus=6.90772569",
-        "time.steps=19428",
-        "fibre.0.start=[90.0,78.0,0.0]",
-    ];
+    let o = JEFFERY_THREE_BEADS;
     let b = coordinator::reference::stokes_chain_2d::chain_bretherton(3);
     let stokes = coordinator::reference::stokes_chain_2d::period_gamma(b);
     let t = jeffery_period("spm/jeffery_rigid.toml", &o, "spm-jeffery-3", stokes);
@@ -668,6 +671,30 @@ fn chord_shape(dir: &std::path::Path) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// `flexible_shear.toml` (L2020's flexible fibre) started 0.6 deg off the compressional axis
+/// with an S-shaped seed of 0.5 grid spacings, turned through the quadrant (12 000 steps,
+/// in-process), with the overrides `extra`: its output folder.
+fn seeded_compressional_run(name: &str, extra: &[&str]) -> std::path::PathBuf {
+    let mut o: Vec<String> = [
+        "fibre.0.initial_bend=0.5",
+        "fibre.0.start=[128.58,52.22,0.0]",
+        "fibre.0.direction=[-0.7145,0.6997,0.0]",
+        "time.steps=12000",
+        "output.interval=500",
+        "analysis.metrics=[\"min_end_to_end_over_length\"]",
+    ]
+    .map(String::from)
+    .to_vec();
+    o.extend(extra.iter().map(|s| s.to_string()));
+    run_scene(
+        name,
+        &config("spm/flexible_shear.toml"),
+        &o,
+        &["--in-process"],
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
 /// Buckling in the compressional quadrant (the snaking of L2020 Fig. 6), seeded: a 10-bead
 /// fibre (flexible_shear.toml: r_b = 6, 180^2, gamma = 1.389e-4) starts 0.6 deg off the
 /// compressional axis with an S-shaped offset of 0.5 grid spacings (`fibre.0.initial_bend`)
@@ -684,26 +711,7 @@ fn chord_shape(dir: &std::path::Path) -> Vec<(f64, f64)> {
 /// 15e3 / 75e3 pair is not reproduced; docs/validation/spm.md).
 #[test]
 fn a_seeded_fibre_buckles_only_above_the_slender_body_threshold() {
-    let run = |name: &str, extra: &[&str]| {
-        let mut o: Vec<String> = [
-            "fibre.0.initial_bend=0.5",
-            "fibre.0.start=[128.58,52.22,0.0]",
-            "fibre.0.direction=[-0.7145,0.6997,0.0]",
-            "time.steps=12000",
-            "output.interval=500",
-            "analysis.metrics=[\"min_end_to_end_over_length\"]",
-        ]
-        .map(String::from)
-        .to_vec();
-        o.extend(extra.iter().map(|s| s.to_string()));
-        run_scene(
-            name,
-            &config("spm/flexible_shear.toml"),
-            &o,
-            &["--in-process"],
-        )
-        .unwrap_or_else(|e| panic!("{name}: {e}"))
-    };
+    let run = seeded_compressional_run;
     let soft = chord_shape(&run(
         "spm-seeded-soft",
         &[
@@ -1015,15 +1023,7 @@ fn s2023_groups_give_the_spm_twin_the_flow_of_the_fpd_scene() {
             N_b = 3-9) and 0.2 % from the 2D Stokes chain; the table reads Harris & Pittman's \
             law inverted; docs/validation/spm.md, The 2D reference"]
 fn jeffery_period_of_a_three_bead_chain_against_reference_md() {
-    let o: Vec<String> = [
-        "fibre.0.beads=3",
-        "walls.velocity=[-0.07465278,0.07465278]",
-        "fibre.0.youngs_modulus=6.90772569",
-        "time.steps=19428",
-        "fibre.0.start=[90.0,78.0,0.0]",
-    ]
-    .map(String::from)
-    .to_vec();
+    let o: Vec<String> = JEFFERY_THREE_BEADS.map(String::from).to_vec();
     let s = run_in_process(
         &config("spm/jeffery_rigid.toml"),
         &o,
@@ -1043,24 +1043,7 @@ fn jeffery_period_of_a_three_bead_chain_against_reference_md() {
             the fibre at eta gamma L^4 / (E I) = 84, on the stiff side); \
             docs/validation/spm.md, Flexible versus rigid"]
 fn l2020_flexible_fibre_snakes_at_15e3() {
-    let o: Vec<String> = [
-        "fibre.0.initial_bend=0.5",
-        "fibre.0.start=[128.58,52.22,0.0]",
-        "fibre.0.direction=[-0.7145,0.6997,0.0]",
-        "time.steps=12000",
-        "output.interval=500",
-        "analysis.metrics=[\"min_end_to_end_over_length\"]",
-    ]
-    .map(String::from)
-    .to_vec();
-    let dir = run_scene(
-        "spm-snaking-criterion",
-        &config("spm/flexible_shear.toml"),
-        &o,
-        &["--in-process"],
-    )
-    .unwrap();
-    let shape = chord_shape(&dir);
+    let shape = chord_shape(&seeded_compressional_run("spm-snaking-criterion", &[]));
     let seed = shape[0].0;
     let grown = shape.iter().map(|s| s.0).fold(0.0, f64::max);
     assert!(
