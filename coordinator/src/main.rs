@@ -268,7 +268,11 @@ fn execute(cmd: Cmd) -> Result<(), String> {
                     let done = export::export(&log, &dir)?;
                     for (path, rows) in &done.files {
                         match path.extension().is_some_and(|e| e == "csv") {
-                            true => println!("wrote {} ({rows} rows)", path.display()),
+                            true => println!(
+                                "wrote {} ({rows} row{})",
+                                path.display(),
+                                if *rows == 1 { "" } else { "s" }
+                            ),
                             false => println!("wrote {}", path.display()),
                         }
                     }
