@@ -471,16 +471,7 @@ impl CoupledModes {
         while lo < end {
             let x = (lo + dx).min(end);
             if grows(x) {
-                let mut hi = x;
-                for _ in 0..50 {
-                    let mid = 0.5 * (lo + hi);
-                    if grows(mid) {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
-                }
-                return Some(lo);
+                return Some(bisect((lo, x), 50, |dt| !grows(dt)).0);
             }
             lo = x;
         }
@@ -503,6 +494,24 @@ impl CoupledModes {
             })
             .fold(0.0, f64::max)
     }
+}
+
+/// Halve `(lo, hi)` `iterations` times, keeping `lo` where `below` holds and `hi` where it
+/// does not (`below(lo)` true and `below(hi)` false to start with).
+fn bisect(
+    (mut lo, mut hi): (f64, f64),
+    iterations: usize,
+    below: impl Fn(f64) -> bool,
+) -> (f64, f64) {
+    for _ in 0..iterations {
+        let mid = 0.5 * (lo + hi);
+        if below(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (lo, hi)
 }
 
 /// Spectral radius of a real square matrix (its Schur form; power iteration should that not
@@ -719,16 +728,7 @@ mod tests {
                 .unwrap_or(f64::INFINITY)
         };
         // The model's limit falls with k, to none at all past the light-bead limit k r = 2.
-        let (mut lo, mut hi) = (0.0, 1.5);
-        for _ in 0..40 {
-            let mid = 0.5 * (lo + hi);
-            if model(mid) > t.dt {
-                lo = mid
-            } else {
-                hi = mid
-            }
-        }
-        lo
+        bisect((0.0, 1.5), 40, |k| model(k) > t.dt).0
     }
 
     /// The step the check accepts for `t` at its measured failing modulus over the
@@ -869,17 +869,10 @@ mod tests {
 
     /// The first `dt` at which [`energy_gain`] over 3000 steps exceeds 1 (or overflows),
     /// bisected between `lo` (stable) and `hi` (grows).
-    fn measured_threshold(f: &Fibre, m_phi: f64, i_phi: f64, mut lo: f64, mut hi: f64) -> f64 {
+    fn measured_threshold(f: &Fibre, m_phi: f64, i_phi: f64, lo: f64, hi: f64) -> f64 {
         let grows = |dt: f64| !(energy_gain(f.clone(), dt, m_phi, i_phi, 3000) <= 1.0);
         assert!(!grows(lo) && grows(hi));
-        for _ in 0..20 {
-            let mid = 0.5 * (lo + hi);
-            if grows(mid) {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
-        }
+        let (lo, hi) = bisect((lo, hi), 20, |dt| !grows(dt));
         0.5 * (lo + hi)
     }
 
