@@ -12,9 +12,9 @@
 //!
 //! Numbers are written in Rust's shortest round-trip form, so a value read back is the same
 //! `f64` as the one logged.
-use crate::mcap_log::salvage_topic;
+use crate::mcap_log::salvage_topics;
 use serde_json::Value;
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -82,15 +82,13 @@ pub struct Exported {
 /// written.
 pub fn export(log: &Path, out: &Path) -> Result<Exported, String> {
     let mut files = Vec::new();
-    let mut damage = None;
-    let tables: [(&str, &str, Table); 3] = [
-        (BEAD_STATES, FILES[0], bead_states_csv),
-        (DIAGNOSTICS, FILES[1], diagnostics_csv),
-        (SCENE, FILES[2], scene_toml),
+    let tables: [(&str, Table); 3] = [
+        (BEAD_STATES, bead_states_csv),
+        (DIAGNOSTICS, diagnostics_csv),
+        (SCENE, scene_toml),
     ];
-    for (topic, name, table) in tables {
-        let (messages, broke) = salvage_topic(log, topic)?;
-        damage = damage.or(broke);
+    let (logged, damage) = salvage_topics(log, &tables.map(|(topic, _)| topic))?;
+    for (((topic, table), name), messages) in tables.into_iter().zip(FILES).zip(logged) {
         if messages.is_empty() {
             continue;
         }
@@ -138,7 +136,10 @@ pub fn bead_states_csv(messages: &[Value]) -> Result<(String, usize), String> {
         if columns(m)? != names {
             return Err(format!("the columns change at step {step}"));
         }
-        let time = number(&m["time"]).ok_or(format!("step {step}: no `time`"))?;
+        let time = m["time"]
+            .is_number()
+            .then(|| cell(&m["time"]))
+            .ok_or(format!("step {step}: no `time`"))?;
         let states = m["states"]
             .as_array()
             .ok_or(format!("step {step}: no `states`"))?;
@@ -192,10 +193,10 @@ pub fn scene_toml(messages: &[Value]) -> Result<(String, usize), String> {
 
 /// `/diagnostics` messages as CSV: the text and its number of data rows.
 pub fn diagnostics_csv(messages: &[Value]) -> Result<(String, usize), String> {
-    let flat: Vec<Vec<(String, String)>> = messages
+    let flat: Vec<BTreeMap<String, String>> = messages
         .iter()
         .map(|m| {
-            let mut cells = Vec::new();
+            let mut cells = BTreeMap::new();
             flatten("", m, &mut cells);
             cells
         })
@@ -203,8 +204,8 @@ pub fn diagnostics_csv(messages: &[Value]) -> Result<(String, usize), String> {
     let first = ["step", "time"];
     let keys: BTreeSet<&str> = flat
         .iter()
-        .flatten()
-        .map(|(k, _)| k.as_str())
+        .flat_map(BTreeMap::keys)
+        .map(String::as_str)
         .filter(|k| !first.contains(k))
         .collect();
     let header: Vec<&str> = first.iter().copied().chain(keys).collect();
@@ -213,12 +214,7 @@ pub fn diagnostics_csv(messages: &[Value]) -> Result<(String, usize), String> {
     for cells in &flat {
         let row: Vec<&str> = header
             .iter()
-            .map(|h| {
-                cells
-                    .iter()
-                    .find(|(k, _)| k == h)
-                    .map_or("", |(_, v)| v.as_str())
-            })
+            .map(|h| cells.get(*h).map_or("", String::as_str))
             .collect();
         text.push_str(&row.join(","));
         text.push('\n');
@@ -226,8 +222,8 @@ pub fn diagnostics_csv(messages: &[Value]) -> Result<(String, usize), String> {
     Ok((text, flat.len()))
 }
 
-/// The leaves of `v` as (dotted key, cell) pairs.
-fn flatten(prefix: &str, v: &Value, out: &mut Vec<(String, String)>) {
+/// The leaves of `v` as cells by dotted key.
+fn flatten(prefix: &str, v: &Value, out: &mut BTreeMap<String, String>) {
     let key = |k: &str| {
         if prefix.is_empty() {
             k.to_string()
@@ -241,12 +237,10 @@ fn flatten(prefix: &str, v: &Value, out: &mut Vec<(String, String)>) {
             .iter()
             .enumerate()
             .for_each(|(i, x)| flatten(&key(&i.to_string()), x, out)),
-        leaf => out.push((prefix.to_string(), cell(leaf))),
+        leaf => {
+            out.insert(prefix.to_string(), cell(leaf));
+        }
     }
-}
-
-fn number(v: &Value) -> Option<String> {
-    v.as_f64().map(|_| cell(v))
 }
 
 /// One CSV cell: numbers as logged (integers as integers, floats in shortest round-trip

@@ -274,15 +274,25 @@ pub fn salvage_topic(
     path: &Path,
     topic: &str,
 ) -> Result<(Vec<serde_json::Value>, Option<String>), String> {
+    let (mut out, damage) = salvage_topics(path, &[topic])?;
+    Ok((out.pop().unwrap_or_default(), damage))
+}
+
+/// [`salvage_topic`] for several topics in one pass over the log: the messages of each, in
+/// the order of `topics`.
+pub fn salvage_topics(
+    path: &Path,
+    topics: &[&str],
+) -> Result<(Vec<Vec<serde_json::Value>>, Option<String>), String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let mut out = Vec::new();
+    let mut out = vec![Vec::new(); topics.len()];
     for m in mcap::MessageStream::new(&bytes).map_err(mcap_err)? {
         let m = match m {
             Ok(m) => m,
             Err(e) => return Ok((out, Some(mcap_err(e)))),
         };
-        if m.channel.topic == topic {
-            out.push(serde_json::from_slice(&m.data).map_err(|e| e.to_string())?);
+        if let Some(i) = topics.iter().position(|t| *t == m.channel.topic) {
+            out[i].push(serde_json::from_slice(&m.data).map_err(|e| e.to_string())?);
         }
     }
     Ok((out, None))
