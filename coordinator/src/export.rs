@@ -28,24 +28,6 @@ pub const SCENE: &str = "/scene";
 /// The files [`export`] writes.
 pub const FILES: [&str; 3] = ["beads.csv", "diagnostics.csv", "scene.toml"];
 
-/// Remove exported files an earlier run left in `dir`: a new run rewrites `run.mcap`, and
-/// tables from the old log next to it would pass for the new run's. `keep`, the scene file
-/// being run (an exported `scene.toml` run again into its own folder), stays.
-pub fn remove_stale(dir: &Path, keep: Option<&Path>) {
-    let same = |p: &Path| {
-        keep.is_some_and(|k| match (p.canonicalize(), k.canonicalize()) {
-            (Ok(a), Ok(b)) => a == b,
-            _ => false,
-        })
-    };
-    for f in FILES {
-        let path = dir.join(f);
-        if !same(&path) {
-            let _ = std::fs::remove_file(path);
-        }
-    }
-}
-
 /// The log of a run: `run` itself if it is a file, else `run/run.mcap`.
 pub fn log_path(run: &Path) -> Result<PathBuf, String> {
     if run.is_dir() {

@@ -19,14 +19,6 @@ use std::path::Path;
 /// The files [`write()`] writes.
 pub const FILES: [&str; 2] = ["orbit.csv", "orbit.png"];
 
-/// Remove orbit files an earlier run left in `dir`, so that a run that writes none does not
-/// leave another scene's orbit next to its own summary.
-pub fn remove_stale(dir: &Path) {
-    for f in FILES {
-        let _ = std::fs::remove_file(dir.join(f));
-    }
-}
-
 /// Most rows `orbit.csv` holds: longer runs keep every k-th sample (the angular velocity is
 /// taken from all samples first).
 pub const MAX_ROWS: usize = 20_000;
@@ -192,20 +184,6 @@ mod tests {
         assert!(worst < 2e-5, "largest error in omega / gamma: {worst:e}");
         assert!((rows.gamma_t[n - 1] - PI * (r + 1.0 / r)).abs() < 1e-12);
         assert!(rows.direction_deg.iter().all(|d| *d > -90.0 && *d <= 90.0));
-    }
-
-    #[test]
-    fn stale_orbit_files_are_removed_and_nothing_else() {
-        let dir = std::env::temp_dir().join(format!("orbit-stale-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        for f in FILES.iter().chain(&["summary.json"]) {
-            std::fs::write(dir.join(f), "x").unwrap();
-        }
-        remove_stale(&dir);
-        assert!(FILES.iter().all(|f| !dir.join(f).exists()));
-        assert!(dir.join("summary.json").exists());
-        remove_stale(&dir); // nothing left to remove: no error
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -271,6 +271,23 @@ pub fn check_fit(scene: &LoadedScene, plan: &Plan, d: &ModelDescription) -> Resu
     Ok(())
 }
 
+/// Remove the files an earlier run derived from its log in `dir` (its orbit, its exported
+/// tables and scene): the new run rewrites the log, and they would pass for the new run's.
+/// `keep`, the scene file being run (an exported `scene.toml` run again into its own
+/// folder), stays.
+fn remove_stale_outputs(dir: &Path, keep: Option<&Path>) {
+    let kept = keep.and_then(|k| k.canonicalize().ok());
+    for f in crate::orbit_report::FILES
+        .iter()
+        .chain(&crate::export::FILES)
+    {
+        let path = dir.join(f);
+        if kept.is_none() || path.canonicalize().ok() != kept {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
 fn writable_dir(out: &Path) -> Result<(), RunError> {
     std::fs::create_dir_all(out).map_err(|e| {
         fail(format!(
@@ -361,8 +378,7 @@ pub fn run(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError
 fn run_on_this_thread(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError> {
     INTERRUPTED.store(false, Ordering::SeqCst);
     writable_dir(&opts.out)?;
-    crate::orbit_report::remove_stale(&opts.out);
-    crate::export::remove_stale(&opts.out, scene.path.as_deref());
+    remove_stale_outputs(&opts.out, scene.path.as_deref());
     let plan = schedule::plan(scene).map_err(fail)?;
     let mcap_path = opts.out.join("run.mcap");
     let mut log = RunLog::create(&mcap_path).map_err(fail)?;
@@ -1044,6 +1060,30 @@ fn progress_bar(show: bool, steps: u64) -> indicatif::ProgressBar {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stale_outputs_are_removed_and_nothing_else_but_the_scene_being_run() {
+        let dir = std::env::temp_dir().join(format!("run-stale-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let derived: Vec<&str> = crate::orbit_report::FILES
+            .iter()
+            .chain(&crate::export::FILES)
+            .copied()
+            .collect();
+        for f in derived.iter().chain(&["summary.json"]) {
+            std::fs::write(dir.join(f), "x").unwrap();
+        }
+        remove_stale_outputs(&dir, None);
+        assert!(derived.iter().all(|f| !dir.join(f).exists()));
+        assert!(dir.join("summary.json").exists());
+        remove_stale_outputs(&dir, None); // nothing left to remove: no error
+        let scene = dir.join("scene.toml");
+        std::fs::write(&scene, "x").unwrap();
+        std::fs::write(dir.join("orbit.csv"), "x").unwrap();
+        remove_stale_outputs(&dir, Some(&scene));
+        assert!(scene.exists() && !dir.join("orbit.csv").exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     /// A batch ends at the next logged step, checkpoint, snapshot or the last step, holds about
     /// BATCH_SECONDS of steps, and is one step while the step's wall time is unknown.
