@@ -1,15 +1,13 @@
 //! The fibre node as a co-simulation component ([`cosim::Component`]).
-use crate::config::{parse_scene, Coupling, FibreGroup, ModelKind, SceneConfig, MAX_SUBSTEPS};
+use crate::config::{parse_scene, Coupling, SceneConfig};
 use crate::fibre::{together, BeadKinematics, Fibre, Model};
 use crate::fibre_contact::FibreContact;
 use crate::fibre_overlap::FibreOverlap;
+use crate::fibre_setup;
 use crate::quaternion::{from_array, to_array, Vec3};
 use crate::self_overlap::SelfOverlap;
-use crate::stability::{fpd_margin, fpd_stiffness_limit, stability_limit, SAFETY};
 use crate::wall_contact::overlaps;
-use crate::{spm_exchange, spm_exchange_stiffness};
 use cosim::description::{parameter as param, ModelDescription, PortDescription};
-use cosim::profile::DEFAULT_FPD_INTERFACE_RATIO;
 use cosim::{
     effects, BeadForce, BeadImpulse, BeadState, Component, ComponentError, Configured, Exchange,
     Phase, PhaseReport, Port,
@@ -162,7 +160,94 @@ fn fill_states(fibres: &[Fibre], out: &mut Vec<BeadState>) {
     }
 }
 
+/// The effects a scene's fibres make active.
+fn active_effects(fibres: &[Fibre]) -> Vec<String> {
+    let mut active = vec![effects::BEAM_ELASTICITY.to_string()];
+    let any = |pred: &dyn Fn(&Fibre) -> bool| fibres.iter().any(pred);
+    if any(&|f| matches!(f.model, Model::CohesiveBeam(_)) && !f.planar) {
+        active.push(effects::TWIST.into());
+    }
+    if any(&|f| f.rotates) {
+        active.push(effects::BEAD_ROTATION.into());
+    }
+    if any(&|f| !f.loads.is_empty()) {
+        active.push(effects::EXTERNAL_LOADS.into());
+    }
+    if any(&|f| f.clamped.iter().any(|&c| c)) {
+        active.push(effects::CLAMP.into());
+    }
+    if any(&|f| f.damping > 0.0) {
+        active.push(effects::DAMPING.into());
+    }
+    active
+}
+
 impl Run {
+    /// The run of `fibres` (set up from `scene`): the watches over overlaps, the contact
+    /// between fibres (its forces at the start computed) and buffers for every bead.
+    fn new(scene: SceneConfig, mut fibres: Vec<Fibre>) -> Self {
+        let fpd = scene.coupling == Coupling::Fpd;
+        let total_beads = fibres.iter().map(|f| f.len()).sum();
+        let self_overlaps = fibres
+            .iter()
+            .zip(&scene.fibres)
+            .map(|(f, cfg)| {
+                let dims = if f.planar { 2 } else { 3 };
+                SelfOverlap::new(f.len(), cfg.bead_radius, cfg.spacing, dims)
+            })
+            .collect();
+        let dims = scene.dimensions as usize;
+        let fibre_overlaps = FibreOverlap::new(
+            &fibres
+                .iter()
+                .zip(&scene.fibres)
+                .map(|(f, cfg)| (f.len(), cfg.bead_radius))
+                .collect::<Vec<_>>(),
+            scene.periodic_box,
+            dims,
+        );
+        let mut fibre_contact = FibreContact::new(
+            &fibres
+                .iter()
+                .zip(&scene.fibres)
+                .map(|(f, cfg)| {
+                    let k = cfg.fibre_contact.then_some(f.contact_stiffness);
+                    (f.len(), cfg.bead_radius, k)
+                })
+                .collect::<Vec<_>>(),
+            scene.periodic_box,
+            dims,
+        );
+        if let Some(c) = &mut fibre_contact {
+            together::compute_forces(&mut fibres, c);
+        }
+        let mut offsets = vec![0];
+        for f in &fibres {
+            offsets.push(offsets.last().copied().unwrap_or(0) + f.len());
+        }
+        Run {
+            coupling: scene.coupling,
+            use_impulses: scene.coupling == Coupling::Spm,
+            scene,
+            fibres,
+            self_overlaps,
+            self_overlap: 0.0,
+            fibre_overlaps,
+            fibre_overlap: 0.0,
+            fibre_contact,
+            offsets,
+            total_beads,
+            forces_current: true,
+            pending: None,
+            published: 0,
+            restored_publication: None,
+            states: Vec::with_capacity(total_beads),
+            impulses: Vec::with_capacity(total_beads),
+            forces: Vec::with_capacity(if fpd { total_beads } else { 0 }),
+            velocities: Vec::with_capacity(if fpd { total_beads } else { 0 }),
+        }
+    }
+
     /// The phase's diagnostics. `step_ends`: the phase leaves the step's positions
     /// (fibre-velocities, fibre-advance), which `self_overlap` is measured at; the other
     /// phases report the value of the step before (fibre-positions' predicted positions
@@ -377,283 +462,22 @@ impl Component for FibreComponent {
         let mut limits = Vec::new();
         let mut derived = Vec::new();
         let mut notes = Vec::new();
-        let fpd = scene.coupling == Coupling::Fpd;
         for (n, cfg) in scene.fibres.iter().enumerate() {
-            if fpd {
-                check_fpd_fibre(n, cfg).map_err(ComponentError)?;
-            }
-            let mut f = Fibre::straight(cfg, scene.dimensions, scene.coupling == Coupling::Spm);
-            let exchange = scene.spm_profile.map(|profile| {
-                let (r, dims) = (cfg.bead_radius, scene.dimensions as usize);
-                if cfg.profile_inertia {
-                    f.inertia = profile.mass_inertia(cfg.density, r, dims).1;
-                }
-                if cfg.implicit_exchange {
-                    let (m, i) = profile.mass_inertia(scene.fluid_density, r, dims);
-                    f.implicit_exchange = Some([m, i]);
-                }
-                spm_exchange::ratios(profile, scene.fluid_density, r, dims, f.mass, f.inertia)
-            });
-            // Clamped beads do not take the exchange's impulses; a fully clamped fibre has
-            // nothing to destabilise; the implicit exchange is stable for any ratio.
-            let explicit = !cfg.implicit_exchange;
-            if let (Some(r), false, true) = (exchange, cfg.clamp.len() == cfg.beads, explicit) {
-                spm_exchange::check(&format!("fibre.{n}"), r, cfg.density)
-                    .map_err(ComponentError)?;
-            }
-            // The fluid mass a 2D FPD bead displaces, rho pi a^2: the inertia of the
-            // holding force and of the explicit coupling's limit.
-            let fpd_mass = scene.fluid_density * std::f64::consts::PI * cfg.bead_radius.powi(2);
-            if fpd && !cfg.clamp.is_empty() {
-                f.hold_under_fpd(fpd_mass, scene.dt);
-            }
-            // Under FPD the beads have no inertia of their own: the limit is that of the
-            // explicit coupling, with the fluid a bead displaces as its mass.
-            let r_xi = scene
-                .fpd_interface_ratio
-                .unwrap_or(DEFAULT_FPD_INTERFACE_RATIO);
-            let lim = if fpd {
-                // About the straight chain, on which the thresholds were measured: a bent
-                // start raises omega_max but not the stiffness at which the coupling fails
-                // (measured, docs/validation/fpd.md).
-                let straight_cfg = crate::config::FibreConfig {
-                    initial_bend: 0.0,
-                    ..cfg.clone()
-                };
-                let straight = Fibre::straight(&straight_cfg, scene.dimensions, false);
-                fpd_stiffness_limit(&straight, fpd_mass, r_xi)
-            } else {
-                stability_limit(&f, cfg.substeps)
-            };
-            if fpd && scene.dt > lim.dt_limit {
-                // omega^2 is linear in (k_s, k_b), so both scaled by this factor fit.
-                let factor = (lim.dt_limit / scene.dt).powi(2);
-                let (k_s, k_b) = match &f.model {
-                    Model::BeadSpring(b) => (b.k_s, b.k_b),
-                    Model::CohesiveBeam(_) => (f64::NAN, f64::NAN),
-                };
-                return Err(ComponentError(format!(
-                    "fibre.{n} is too stiff for the explicit FPD coupling (S2023 section II C): \
-                     with the fluid a bead displaces, rho pi a^2 = {:.6e}, as its inertia, its \
-                     fastest mode has omega_max = {:.6e}, stable for time.dt up to {:.6e} \
-                     ({:.3} x 2 / omega_max at fluid.interface_ratio = {}, a measured bound), \
-                     and the lattice step is {:?}; scale its \
-                     stiffness by at most {factor:.4e}: fibre.{n}.stretch_stiffness (k_s = \
-                     {k_s:.6e}) to at most {:.6e} and its bending (k_b = {k_b:.6e}, or \
-                     fibre.{n}.bending_number) by the same factor, or raise fluid.density",
-                    fpd_mass,
-                    lim.omega_max,
-                    lim.dt_limit,
-                    fpd_margin(r_xi),
-                    r_xi,
-                    scene.dt,
-                    k_s * factor
-                )));
-            }
-            if fpd && lim.dt_limit.is_finite() {
-                limits.push((format!("FPD fibre stiffness (fibre.{n})"), lim.dt_limit));
-            }
-            let h = scene.dt / cfg.substeps as f64;
-            if !fpd && h > lim.step_limit * SAFETY {
-                let h_ok = lim.step_limit * SAFETY;
-                let need = (scene.dt / h_ok).ceil();
-                let advice = if need <= MAX_SUBSTEPS as f64 {
-                    format!(" or raise fibre.{n}.substeps to at least {need}")
-                } else {
-                    String::new()
-                };
-                return Err(ComponentError(format!(
-                    "time step too large for fibre.{n} (beam stiffness limit): \
-                     time.dt / fibre.{n}.substeps = {:?} / {} = {h:.6e} exceeds the stable fibre step \
-                     {h_ok:.6e} (symplectic Euler, omega_max = {:.6e}, damping {}, 2 % margin); \
-                     lower time.dt to at most {:.6e}{advice}",
-                    scene.dt, cfg.substeps, lim.omega_max, lim.damping, lim.dt_limit
-                )));
-            }
-            if !fpd && lim.dt_limit.is_finite() {
-                limits.push((format!("beam stiffness (fibre.{n})"), lim.dt_limit));
-            }
-            // A mode the once-per-step impulse feeds (spm_exchange_stiffness.rs).
-            if let (Some(r), false, true) = (exchange, cfg.clamp.len() == cfg.beads, explicit) {
-                let p = format!("fibre.{n}");
-                let diffusion = scene
-                    .fluid_kinematic_viscosity
-                    .zip(scene.spm_profile)
-                    .map(|(nu, profile)| nu * scene.dt / (profile.xi * profile.xi));
-                let x = spm_exchange_stiffness::check(
-                    &p,
-                    (&f, cfg.density),
-                    lim.omega_max,
-                    r,
-                    (scene.dt, diffusion),
-                )
-                .map_err(ComponentError)?;
-                if let Some(dt_limit) = x.limit() {
-                    limits.push((format!("explicit exchange stiffness ({p})"), dt_limit));
-                }
-                notes.extend(x.note(&p));
-            }
-            let p = format!("fibre.{n}");
-            derived.push((format!("{p}.length"), cfg.spacing * (cfg.beads - 1) as f64));
-            derived.push((format!("{p}.bending_rigidity"), f.bending_rigidity()));
-            derived.push((format!("{p}.bead_mass"), f.mass));
-            derived.push((format!("{p}.bead_moment_of_inertia"), f.inertia));
-            if let Some(r) = exchange {
-                derived.push((format!("{p}.profile_to_bead_mass"), r.mass));
-                derived.push((format!("{p}.profile_to_bead_inertia"), r.inertia));
-            }
-            // With one sub-step the implicit exchange moves a bead as the explicit one moves
-            // a bead carrying its profile's fluid (docs/validation/spm.md, "What the implicit
-            // exchange is").
-            if let Some([m_phi, i_phi]) = f.implicit_exchange {
-                if cfg.substeps == 1 {
-                    derived.push((format!("{p}.effective_bead_mass"), f.mass + m_phi));
-                    derived.push((
-                        format!("{p}.effective_bead_moment_of_inertia"),
-                        f.inertia + i_phi,
-                    ));
-                }
-                notes.push(implicit_exchange_note(n, cfg, &f, [m_phi, i_phi]));
-            }
-            match &f.model {
-                Model::CohesiveBeam(b) => {
-                    derived.push((format!("{p}.axial_stiffness"), b.axial));
-                    if let Some(shear) = scene.shear_flow {
-                        // S2023's K with the chain's k_b = E I / l0 (bead_spring.rs), so that a
-                        // beam and a bead-spring chain of the same rigidity report one K.
-                        let kb = f.bending_rigidity() / cfg.spacing;
-                        let k = FibreGroup::Bending.of(kb, shear, cfg);
-                        derived.push((format!("{p}.bending_number"), k));
-                    }
-                    if !f.planar {
-                        derived.push((format!("{p}.torsional_rigidity"), b.twist * b.rest_length));
-                    }
-                }
-                Model::BeadSpring(b) => {
-                    derived.push((format!("{p}.stretch_stiffness"), b.k_s));
-                    derived.push((format!("{p}.bending_stiffness"), b.k_b));
-                    if let Some(shear) = scene.shear_flow {
-                        // S2023 eq. 18, K = 2 k_b / (eta_f gamma l_c^2), and section II C,
-                        // K_s = k_s / (eta_f V0 l0), however the stiffnesses were given.
-                        let k = FibreGroup::Bending.of(b.k_b, shear, cfg);
-                        derived.push((format!("{p}.bending_number"), k));
-                        let ks = FibreGroup::Stretch.of(b.k_s, shear, cfg);
-                        derived.push((format!("{p}.stretch_number"), ks));
-                    }
-                }
-            }
-            derived.push((format!("{p}.omega_max"), lim.omega_max));
-            derived.push((format!("{p}.substeps"), cfg.substeps as f64));
-            derived.push((format!("{p}.affinity"), cfg.affinity));
-            fibres.push(f);
+            let setup = fibre_setup::set_up(n, cfg, &scene).map_err(ComponentError)?;
+            limits.extend(setup.limits);
+            derived.extend(setup.derived);
+            notes.extend(setup.notes);
+            fibres.push(setup.fibre);
         }
-
-        let mut active = vec![effects::BEAM_ELASTICITY.to_string()];
-        let any = |pred: &dyn Fn(&Fibre) -> bool| fibres.iter().any(pred);
-        if any(&|f| matches!(f.model, Model::CohesiveBeam(_)) && !f.planar) {
-            active.push(effects::TWIST.into());
+        let effects = active_effects(&fibres);
+        for (n, f) in fibres.iter().enumerate() {
+            notes.extend(fibre_setup::rollers_note(n, f, scene.coupling));
         }
-        if any(&|f| f.rotates) {
-            active.push(effects::BEAD_ROTATION.into());
-        }
-        if any(&|f| !f.loads.is_empty()) {
-            active.push(effects::EXTERNAL_LOADS.into());
-        }
-        if any(&|f| f.clamped.iter().any(|&c| c)) {
-            active.push(effects::CLAMP.into());
-        }
-        if any(&|f| f.damping > 0.0) {
-            active.push(effects::DAMPING.into());
-        }
-
-        // Bead-spring beads feel no torque from their neighbours, so under SPM, where each
-        // bead is a rigid body turning with the fluid, the chain is a train of rollers
-        // (docs/validation/spm.md, "Flexible versus rigid"; fpd.md, "S2023's Fig. 7 scene").
-        if scene.coupling == Coupling::Spm {
-            for (n, f) in fibres.iter().enumerate() {
-                if matches!(f.model, Model::BeadSpring(_))
-                    && f.len() > 2
-                    && f.rotates
-                    && !f.spin_with_chord
-                {
-                    notes.push(format!(
-                        "fibre.{n} (bead-spring under spm): its beads take no torque from each \
-                         other, so each turns freely with the fluid and the chain moves like a \
-                         train of rollers: it turns like a slimmer body and bends less than a \
-                         solid fibre of the same bending rigidity (2D Stokes: 2-80 times less \
-                         S-shaped moment; on S2023's Fig. 7 scene a tenth as much at the \
-                         vertical, and it sticks where the cohesive beam tumbles; \
-                         docs/validation/spm.md). For a solid fibre, use \
-                         fibre.{n}.model = \"cohesive-beam\", or fibre.{n}.bead_spin = \
-                         \"chord\""
-                    ));
-                }
-            }
-        }
-
-        let total_beads = fibres.iter().map(|f| f.len()).sum();
-        let self_overlaps = fibres
-            .iter()
-            .zip(&scene.fibres)
-            .map(|(f, cfg)| {
-                let dims = if f.planar { 2 } else { 3 };
-                SelfOverlap::new(f.len(), cfg.bead_radius, cfg.spacing, dims)
-            })
-            .collect();
-        let dims = scene.dimensions as usize;
-        let fibre_overlaps = FibreOverlap::new(
-            &fibres
-                .iter()
-                .zip(&scene.fibres)
-                .map(|(f, cfg)| (f.len(), cfg.bead_radius))
-                .collect::<Vec<_>>(),
-            scene.periodic_box,
-            dims,
-        );
-        let mut fibre_contact = FibreContact::new(
-            &fibres
-                .iter()
-                .zip(&scene.fibres)
-                .map(|(f, cfg)| {
-                    let k = cfg.fibre_contact.then_some(f.contact_stiffness);
-                    (f.len(), cfg.bead_radius, k)
-                })
-                .collect::<Vec<_>>(),
-            scene.periodic_box,
-            dims,
-        );
-        if let Some(c) = &mut fibre_contact {
-            together::compute_forces(&mut fibres, c);
-        }
-        let mut offsets = vec![0];
-        for f in &fibres {
-            offsets.push(offsets.last().copied().unwrap_or(0) + f.len());
-        }
-        let mut run = Run {
-            coupling: scene.coupling,
-            use_impulses: scene.coupling == Coupling::Spm,
-            scene,
-            fibres,
-            self_overlaps,
-            self_overlap: 0.0,
-            fibre_overlaps,
-            fibre_overlap: 0.0,
-            fibre_contact,
-            offsets,
-            total_beads,
-            forces_current: true,
-            pending: None,
-            published: 0,
-            restored_publication: None,
-            states: Vec::with_capacity(total_beads),
-            impulses: Vec::with_capacity(total_beads),
-            forces: Vec::with_capacity(if fpd { total_beads } else { 0 }),
-            velocities: Vec::with_capacity(if fpd { total_beads } else { 0 }),
-        };
+        let mut run = Run::new(scene, fibres);
         run.publish(0, Port::BeadStates, exchange)?;
         let configured = Configured {
             beads_per_fibre: run.fibres.iter().map(|f| f.len()).collect(),
-            effects: active,
+            effects,
             time_step_limits: limits,
             derived,
             notes,
@@ -917,68 +741,6 @@ impl Component for FibreComponent {
 }
 
 /// What the FPD coupling cannot carry, refused before step 0 with the reason.
-/// What the implicit exchange does to fibre `n`'s beads: the drag at the new velocity makes
-/// the fluid in a bead's profile (`[m_phi, I_phi]`) part of the bead's inertia. With one
-/// sub-step a kick is algebraically the explicit exchange with mass M + m_phi; with n
-/// sub-steps each kick takes 1/n of the drag, which adds less (docs/validation/spm.md, "What
-/// the implicit exchange is").
-fn implicit_exchange_note(
-    n: usize,
-    cfg: &crate::config::FibreConfig,
-    f: &Fibre,
-    [m_phi, i_phi]: [f64; 2],
-) -> String {
-    let per_volume = cfg.density * m_phi / f.mass;
-    let how = if cfg.substeps == 1 {
-        format!(
-            "its translation is that of a bead of mass M + m_phi = {:.4e} ({:.3} times its own: \
-             fibre.{n}.density = {} moves as {:.4}) under the explicit exchange, its spin that \
-             of moment of inertia I + I_phi ({:.3} times). For beads of density rho_p above \
-             {per_volume:.4}, fibre.{n}.density = rho_p - {per_volume:.4} gives their mass; \
-             lighter ones have no implicit equivalent (the explicit exchange runs beads down to \
-             half their profile's fluid in mass and moment of inertia)",
-            f.mass + m_phi,
-            1.0 + m_phi / f.mass,
-            cfg.density,
-            cfg.density + per_volume,
-            1.0 + i_phi / f.inertia,
-        )
-    } else {
-        format!(
-            "with one sub-step it would move as a bead of mass M + m_phi ({:.3} times its own) \
-             under the explicit exchange; with fibre.{n}.substeps = {} each kick takes 1/{} of \
-             the drag, and the added inertia is less",
-            1.0 + m_phi / f.mass,
-            cfg.substeps,
-            cfg.substeps,
-        )
-    };
-    format!(
-        "fibre.{n}.exchange = \"implicit\": the drag at the new velocity makes the fluid in each \
-         bead's smoothed profile part of the bead's inertia: {how} (docs/validation/spm.md, \
-         \"What the implicit exchange is\")"
-    )
-}
-
-fn check_fpd_fibre(n: usize, cfg: &crate::config::FibreConfig) -> Result<(), String> {
-    if cfg.model == ModelKind::CohesiveBeam {
-        return Err(format!(
-            "fibre.{n}.model = \"cohesive-beam\" cannot run under fluid.method = \"fpd-lbm\": \
-             FPD moves bead centres with the flow (S2023 eq. 5) and gives no bead rotation, \
-             which the cohesive beam's bending and twist are made of; use \
-             model = \"bead-spring\" (S2023 section II B)"
-        ));
-    }
-    if cfg.substeps != 1 {
-        return Err(format!(
-            "fibre.{n}.substeps = {}: under fluid.method = \"fpd-lbm\" the beads move with the \
-             flow, one position update per lattice step (S2023 section II C); set it to 1",
-            cfg.substeps
-        ));
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -15,6 +15,8 @@
 //! - [`spm_exchange`], [`spm_exchange_stiffness`]: light beads and stiff fibres under the
 //!   explicit SPM exchange;
 //! - [`config`]: the `[[fibre]]` part of a scene;
+//! - `fibre_setup`: one fibre made ready to run: built, checked against the time step
+//!   (refused with the limit and the cures named), its derived values and notes;
 //! - [`component`]: [`FibreComponent`], the [`cosim::Component`] the executable serves;
 //! - [`quaternion`]: rotation helpers (L2020 eqs. 3-4 and appendix A).
 pub mod bead_pairs;
@@ -26,6 +28,7 @@ pub mod energies;
 pub mod fibre;
 pub mod fibre_contact;
 pub mod fibre_overlap;
+mod fibre_setup;
 #[cfg(test)]
 mod gradient_check;
 pub mod near_pairs;
