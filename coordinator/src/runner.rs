@@ -14,7 +14,7 @@ use serde_json::json;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
@@ -585,26 +585,7 @@ fn drive(
     }
     let schedule_names: Vec<String> = plan.schedule.iter().map(|p| p.name().to_string()).collect();
     if opts.verbose {
-        eprintln!("scene:    {}", scene.name());
-        eprintln!("effects:  {}", st.effects.join(", "));
-        eprintln!("schedule: {}", schedule_names.join(" -> "));
-        eprintln!(
-            "layout:   {}",
-            if opts.in_process {
-                "in-process".to_string()
-            } else {
-                format!("processes (run prefix {prefix})")
-            }
-        );
-        if let Some(f) = scene.fields_summary() {
-            eprintln!("fields:   {f}");
-        }
-        for g in &scene.groups.lines {
-            eprintln!("group:    {g}");
-        }
-        for n in &st.configured.notes {
-            eprintln!("note:     {n}");
-        }
+        announce(scene, opts, &schedule_names, prefix, st);
     }
     log.scene(&scene.toml, &st.effects, &schedule_names)
         .map_err(fail)?;
@@ -665,11 +646,11 @@ fn drive(
     // and a fluid that already holds the bead states of the step: from the second step on.
     // A node alone (a fluid without fibres, a fibre without fluid) waits for nothing; its
     // batches save it a request and a reply per phase.
-    let mut batches = (!opts.in_process && !opts.lock_step).then(|| {
+    let mut batching = (!opts.in_process && !opts.lock_step).then(|| {
         let names: Vec<String> = nodes.iter().map(|n| n.link.name().to_string()).collect();
-        pipeline::Batches::new(&plan.schedule, &owner, &names)
+        Batching::new(pipeline::Batches::new(&plan.schedule, &owner, &names))
     });
-    st.pipelined = batches.is_some();
+    st.pipelined = batching.is_some();
     let every = opts.checkpoint_interval;
     // FPD walls bounce back at the lattice's ends; SPM walls are slabs in a periodic box.
     let periodic_y = plan.coupling != "fpd" || scene.scene.walls.is_none();
@@ -691,82 +672,33 @@ fn drive(
         every: if rests || interrupted { 1 } else { interval },
         last: steps.checked_sub(1),
     };
-    // Reports of the steps the nodes ran ahead of the loop in a multi-step batch, and the wall
-    // time of one step of the last batch (how many steps the next may hold).
-    let mut ahead: std::collections::VecDeque<Vec<PhaseReport>> = Default::default();
-    let mut step_wall: Option<f64> = None;
+    let cadence = Cadence {
+        steps,
+        interval,
+        checkpoint_every: every,
+        fields_every,
+        rests,
+    };
     for step in first_step..steps {
-        // A batch may go out a step early (pipeline.rs) only if nothing can end the run or
-        // save it between the two steps: not before the last step, a checkpoint, a possible
-        // stop at rest, or after Ctrl-C.
-        let send_next = step + 1 < steps
-            && !rests
-            && (every == 0 || (step + 1) % every != 0)
-            && (fields_every == 0 || (step + 1) % fields_every != 0)
-            && !INTERRUPTED.load(Ordering::SeqCst);
-        let mut next_sent = false;
         let full = full_reports(INTERRUPTED.load(Ordering::SeqCst));
-        let reports = match &mut batches {
-            Some(_) if !ahead.is_empty() => ahead.pop_front().expect("not empty"),
-            Some(b) if step > first_step => {
-                // Several steps in one batch where the coordinator needs nothing in between;
-                // a single step may send the next one early (then that one is single too),
-                // unless the next is to be a batch of several.
-                let single = rests || INTERRUPTED.load(Ordering::SeqCst) || !b.can_hold_steps();
-                let steps_from = |s| {
-                    if single {
-                        1
-                    } else {
-                        batch_steps(s, steps, interval, [every, fields_every], step_wall)
-                    }
-                };
-                let count = if b.sent_early(step) {
-                    1
-                } else {
-                    steps_from(step)
-                };
-                let send_next = send_next && count == 1 && steps_from(step + 1) == 1;
-                st.largest_batch = st.largest_batch.max(count);
-                let t0 = Instant::now();
-                let mut reports = b
-                    .run_steps(
-                        (step, count, full),
-                        send_next,
-                        nodes,
-                        (&mut st.seconds_per_phase, &mut st.seconds_waiting),
-                        opts.node_timeout,
-                    )
-                    .map_err(|(e, done)| {
-                        st.steps_done = done;
-                        st.time = done as f64 * dt;
-                        e
-                    })?;
-                step_wall = Some(t0.elapsed().as_secs_f64() / count as f64);
-                next_sent = b.sent_early(step + 1);
-                ahead.extend(reports.drain(1..));
-                reports.pop().expect("a report per step")
+        // The steps after the first go in batches where the run is pipelined.
+        let (reports, next_sent) = match &mut batching {
+            Some(b) if step > first_step || b.has_ahead() => {
+                b.reports_of_step(step, cadence, full, nodes, st, opts.node_timeout, dt)?
             }
-            _ => run_step_lock_step(
-                (step, full.detail(step)),
-                &plan.schedule,
-                &owner,
-                nodes,
-                &mut st.seconds_per_phase,
-            )?,
+            _ => {
+                let reports = run_step_lock_step(
+                    (step, full.detail(step)),
+                    &plan.schedule,
+                    &owner,
+                    nodes,
+                    &mut st.seconds_per_phase,
+                )?;
+                (reports, false)
+            }
         };
-        // The nodes are past this step: it cannot be the last.
-        next_sent |= !ahead.is_empty();
-        let mut report: Vec<(String, f64)> = Vec::new();
         let in_full = reports.iter().all(|r| r.detail == cosim::Detail::Full);
-        for r in reports {
-            // One value per name: a later phase's report replaces an earlier one's.
-            for (k, v) in r.diagnostics {
-                match report.iter_mut().find(|(name, _)| *name == k) {
-                    Some(slot) => slot.1 = v,
-                    None => report.push((k, v)),
-                }
-            }
-        }
+        let report = merge_reports(reports);
         st.steps_done = step + 1;
         st.time = (step + 1) as f64 * dt;
         if let Some((k, v)) = report.iter().find(|(_, v)| !v.is_finite()) {
@@ -848,6 +780,90 @@ fn drive(
             st.file_errors.insert("fields png".into(), e.clone());
         }
     }
+    let end = RunEnd {
+        initial: &initial,
+        trajectory: &trajectory,
+        track,
+        beads: &beads,
+    };
+    conclude(scene, opts, plan, &mut *exchange, end, st)?;
+    Ok(status)
+}
+
+/// Print what the run is about to do: scene, effects, schedule, layout, snapshots, the
+/// scene's dimensionless groups and the nodes' notes.
+fn announce(
+    scene: &LoadedScene,
+    opts: &RunOptions,
+    schedule_names: &[String],
+    prefix: &str,
+    st: &RunState,
+) {
+    eprintln!("scene:    {}", scene.name());
+    eprintln!("effects:  {}", st.effects.join(", "));
+    eprintln!("schedule: {}", schedule_names.join(" -> "));
+    eprintln!(
+        "layout:   {}",
+        if opts.in_process {
+            "in-process".to_string()
+        } else {
+            format!("processes (run prefix {prefix})")
+        }
+    );
+    if let Some(f) = scene.fields_summary() {
+        eprintln!("fields:   {f}");
+    }
+    for g in &scene.groups.lines {
+        eprintln!("group:    {g}");
+    }
+    for n in &st.configured.notes {
+        eprintln!("note:     {n}");
+    }
+}
+
+/// One step's diagnostics from its phases' reports, one value per name in the order the
+/// names first appear: a later phase's report replaces an earlier one's.
+fn merge_reports(reports: Vec<PhaseReport>) -> Vec<(String, f64)> {
+    let mut report: Vec<(String, f64)> = Vec::new();
+    for r in reports {
+        for (k, v) in r.diagnostics {
+            match report.iter_mut().find(|(name, _)| *name == k) {
+                Some(slot) => slot.1 = v,
+                None => report.push((k, v)),
+            }
+        }
+    }
+    report
+}
+
+/// What the end of the run's loop hands to [`conclude`].
+struct RunEnd<'a> {
+    /// The bead states of step 0 (from the checkpoint in a resumed run).
+    initial: &'a [BeadState],
+    /// Fibre 0's trajectory, followed where a metric needs it (`track`).
+    trajectory: &'a crate::trajectory::Trajectory,
+    track: bool,
+    beads: &'a [usize],
+}
+
+/// After the last step: the final bead states (and SPM impulses), the metrics, and the orbit
+/// files where a metric followed the trajectory in a wall shear.
+fn conclude(
+    scene: &LoadedScene,
+    opts: &RunOptions,
+    plan: &Plan,
+    exchange: &mut dyn cosim::Exchange,
+    end: RunEnd,
+    st: &mut RunState,
+) -> Result<(), RunError> {
+    let RunEnd {
+        initial,
+        trajectory,
+        track,
+        beads,
+    } = end;
+    let has_beads = !beads.is_empty();
+    let mut states = Vec::new();
     if has_beads {
         exchange
             .read_states(Port::BeadStates, &mut states)
@@ -862,13 +878,13 @@ fn drive(
     }
     let ctx = crate::metrics::Context {
         scene: &scene.scene,
-        beads_per_fibre: &beads,
+        beads_per_fibre: beads,
         derived: &st.configured.derived,
-        initial: &initial,
+        initial,
         last: &states,
         diagnostics: &st.last_diagnostics,
         impulses: &impulses,
-        trajectory: &trajectory,
+        trajectory,
     };
     (st.metrics, st.metric_errors) =
         crate::metrics::compute_each(&scene.scene.analysis.metrics, &ctx, &mut st.dimensionless);
@@ -891,7 +907,115 @@ fn drive(
             }
         }
     }
-    Ok(status)
+    Ok(())
+}
+
+/// When the coordinator needs the nodes between two steps: the run's length, its output,
+/// checkpoint and snapshot intervals (0: none), and whether it may stop at rest.
+#[derive(Clone, Copy)]
+struct Cadence {
+    steps: u64,
+    interval: u64,
+    checkpoint_every: u64,
+    fields_every: u64,
+    rests: bool,
+}
+
+impl Cadence {
+    /// Whether the batch after the one ending at `step` may go out before the coordinator
+    /// has seen `step` (pipeline.rs): only if nothing can end the run or save it between the
+    /// two, that is not before the last step, a checkpoint, a snapshot, a possible stop at
+    /// rest, or after Ctrl-C.
+    fn may_send_next(&self, step: u64) -> bool {
+        let at = |every: u64| every != 0 && (step + 1).is_multiple_of(every);
+        step + 1 < self.steps
+            && !self.rests
+            && !at(self.checkpoint_every)
+            && !at(self.fields_every)
+            && !INTERRUPTED.load(Ordering::SeqCst)
+    }
+}
+
+/// The pipelined batches of a run as processes, and the reports of the steps the nodes ran
+/// ahead of the coordinator's loop.
+struct Batching {
+    batches: pipeline::Batches,
+    /// Reports of the steps the nodes ran ahead of the loop in a multi-step batch.
+    ahead: std::collections::VecDeque<Vec<PhaseReport>>,
+    /// Wall time of one step of the last batch (how many steps the next may hold).
+    step_wall: Option<f64>,
+}
+
+impl Batching {
+    fn new(batches: pipeline::Batches) -> Self {
+        Self {
+            batches,
+            ahead: Default::default(),
+            step_wall: None,
+        }
+    }
+
+    fn has_ahead(&self) -> bool {
+        !self.ahead.is_empty()
+    }
+
+    /// The phases' reports of `step`, from a batch already run or from a new one, and whether
+    /// the nodes are already past it (so it cannot be the last).
+    #[allow(clippy::too_many_arguments)]
+    fn reports_of_step(
+        &mut self,
+        step: u64,
+        cadence: Cadence,
+        full: cosim::FullReports,
+        nodes: &mut [Node],
+        st: &mut RunState,
+        node_timeout: Duration,
+        dt: f64,
+    ) -> Result<(Vec<PhaseReport>, bool), RunError> {
+        if let Some(reports) = self.ahead.pop_front() {
+            return Ok((reports, self.has_ahead()));
+        }
+        let b = &mut self.batches;
+        // Several steps in one batch where the coordinator needs nothing in between; a single
+        // step may send the next one early (then that one is single too), unless the next is
+        // to be a batch of several.
+        let single = cadence.rests || INTERRUPTED.load(Ordering::SeqCst) || !b.can_hold_steps();
+        let step_wall = self.step_wall;
+        let steps_from = |s| {
+            if single {
+                1
+            } else {
+                let every = [cadence.checkpoint_every, cadence.fields_every];
+                batch_steps(s, cadence.steps, cadence.interval, every, step_wall)
+            }
+        };
+        let count = if b.sent_early(step) {
+            1
+        } else {
+            steps_from(step)
+        };
+        let send_next = cadence.may_send_next(step) && count == 1 && steps_from(step + 1) == 1;
+        st.largest_batch = st.largest_batch.max(count);
+        let t0 = Instant::now();
+        let mut reports = b
+            .run_steps(
+                (step, count, full),
+                send_next,
+                nodes,
+                (&mut st.seconds_per_phase, &mut st.seconds_waiting),
+                node_timeout,
+            )
+            .map_err(|(e, done)| {
+                st.steps_done = done;
+                st.time = done as f64 * dt;
+                e
+            })?;
+        self.step_wall = Some(t0.elapsed().as_secs_f64() / count as f64);
+        let next_sent = b.sent_early(step + 1);
+        self.ahead.extend(reports.drain(1..));
+        let reports = reports.pop().expect("a report per step");
+        Ok((reports, next_sent || self.has_ahead()))
+    }
 }
 
 /// The longest a multi-step batch should take: the coordinator looks at Ctrl-C and the
