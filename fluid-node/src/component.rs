@@ -396,6 +396,69 @@ impl Run {
     }
 }
 
+/// The numbers an SPM scene reports when configured ("derived" in the summary): the
+/// kinematic viscosity, the profile's diffusion number nu dt / xi^2, the beads' volume
+/// fraction, and between walls the gap, the shear rate, Re on fibre 0's length (else the
+/// gap), S2023's C and Re_ps (eq. 18) and L2020's stiffness k0 / (L0 eta0 gamma0).
+fn spm_derived_values(cfg: &FluidConfig, grid: Grid, walls: Option<&Walls>) -> Vec<(String, f64)> {
+    let nu = cfg.kinematic_viscosity();
+    let mut derived = vec![
+        ("fluid.kinematic_viscosity".to_string(), nu),
+        (
+            "fluid.spm_diffusion_number".to_string(),
+            nu * cfg.dt / (cfg.xi * cfg.xi),
+        ),
+    ];
+    let cell_volume = grid.cells() as f64;
+    if !cfg.fibres.is_empty() {
+        let solid: f64 = cfg
+            .fibres
+            .iter()
+            .map(|f| {
+                let r = f.bead_radius;
+                let v = if cfg.dimensions == 2 {
+                    PI * r * r
+                } else {
+                    4.0 / 3.0 * PI * r * r * r
+                };
+                v * f.beads as f64
+            })
+            .sum();
+        derived.push(("fluid.solid_volume_fraction".into(), solid / cell_volume));
+    }
+    if let Some(w) = walls {
+        let gamma = w.shear_rate();
+        derived.push(("fluid.gap".into(), w.gap));
+        derived.push(("fluid.shear_rate".into(), gamma));
+        let l = cfg.fibres.first().map_or(w.gap, |f| f.length());
+        derived.push((
+            "fluid.reynolds".into(),
+            cfg.density * gamma.abs() * l * l / cfg.viscosity,
+        ));
+        if let Some(f) = cfg.fibres.first() {
+            // S2023 eq. 18 with l_c = N d (the fibre's length for touching beads) and H the
+            // gap between the slabs, as the FPD fluid reports them.
+            let lc = f.beads as f64 * 2.0 * f.bead_radius;
+            derived.push(("fluid.confinement".into(), lc / w.gap));
+            derived.push((
+                "fluid.particle_shear_reynolds".into(),
+                cfg.density * gamma.abs() * lc * lc / (4.0 * cfg.viscosity),
+            ));
+            if let Some(e) = f.youngs_modulus {
+                if gamma != 0.0 {
+                    // k0 = pi r_b E / 2 with L0 = 1 (grid units).
+                    let k0 = PI * f.bead_radius * e / 2.0;
+                    derived.push((
+                        "fluid.k0_over_l0_eta_gamma".into(),
+                        k0 / (cfg.viscosity * gamma.abs()),
+                    ));
+                }
+            }
+        }
+    }
+    derived
+}
+
 impl Component for FluidComponent {
     fn describe(&self) -> ModelDescription {
         let len = "length";
@@ -611,61 +674,7 @@ impl Component for FluidComponent {
             active.push(effects::CAPILLARITY.to_string());
         }
 
-        let mut derived = vec![
-            ("fluid.kinematic_viscosity".to_string(), nu),
-            (
-                "fluid.spm_diffusion_number".to_string(),
-                nu * cfg.dt / (cfg.xi * cfg.xi),
-            ),
-        ];
-        let cell_volume = grid.cells() as f64;
-        if !cfg.fibres.is_empty() {
-            let solid: f64 = cfg
-                .fibres
-                .iter()
-                .map(|f| {
-                    let r = f.bead_radius;
-                    let v = if cfg.dimensions == 2 {
-                        PI * r * r
-                    } else {
-                        4.0 / 3.0 * PI * r * r * r
-                    };
-                    v * f.beads as f64
-                })
-                .sum();
-            derived.push(("fluid.solid_volume_fraction".into(), solid / cell_volume));
-        }
-        if let Some(w) = spm.walls() {
-            let gamma = w.shear_rate();
-            derived.push(("fluid.gap".into(), w.gap));
-            derived.push(("fluid.shear_rate".into(), gamma));
-            let l = cfg.fibres.first().map_or(w.gap, |f| f.length());
-            derived.push((
-                "fluid.reynolds".into(),
-                cfg.density * gamma.abs() * l * l / cfg.viscosity,
-            ));
-            if let Some(f) = cfg.fibres.first() {
-                // S2023 eq. 18 with l_c = N d (the fibre's length for touching beads) and H the
-                // gap between the slabs, as the FPD fluid reports them.
-                let lc = f.beads as f64 * 2.0 * f.bead_radius;
-                derived.push(("fluid.confinement".into(), lc / w.gap));
-                derived.push((
-                    "fluid.particle_shear_reynolds".into(),
-                    cfg.density * gamma.abs() * lc * lc / (4.0 * cfg.viscosity),
-                ));
-                if let Some(e) = f.youngs_modulus {
-                    if gamma != 0.0 {
-                        // k0 = pi r_b E / 2 with L0 = 1 (grid units).
-                        let k0 = PI * f.bead_radius * e / 2.0;
-                        derived.push((
-                            "fluid.k0_over_l0_eta_gamma".into(),
-                            k0 / (cfg.viscosity * gamma.abs()),
-                        ));
-                    }
-                }
-            }
-        }
-
+        let mut derived = spm_derived_values(&cfg, grid, spm.walls());
         if let Some(b) = &cfg.binary {
             derived.extend(crate::binary_fluid::derived::numbers(&cfg, b, grid));
         }
