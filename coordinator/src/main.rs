@@ -137,9 +137,8 @@ fn execute(cmd: Cmd) -> Result<(), String> {
                     "--node-timeout: expected a positive number of seconds, got {node_timeout}"
                 ));
             }
-            let scene = scene::load(config.as_deref(), &set).map_err(|e| e.to_string())?;
             let opts = runner::RunOptions {
-                out: out.clone(),
+                out,
                 in_process,
                 progress: !quiet,
                 verbose: !quiet,
@@ -148,58 +147,9 @@ fn execute(cmd: Cmd) -> Result<(), String> {
                 resume,
                 lock_step,
             };
-            let result = runner::run(&scene, &opts)
-                .map_err(|e| format!("{e}\n(the log written so far is in {})", out.display()))?;
-            print_result(&result.summary, &out);
-            if result.summary["status"] == "interrupted" {
-                return Err(format!(
-                    "interrupted at step {} (Ctrl-C); the log and summary so far are in {}",
-                    result.summary["steps"],
-                    out.display()
-                ));
-            }
-            Ok(())
+            run(config.as_deref(), &set, &opts)
         }
-        Cmd::Check { config, set } => {
-            let scene = scene::load(config.as_deref(), &set).map_err(|e| e.to_string())?;
-            let (plan, configured, descriptions) =
-                runner::check(&scene).map_err(|e| e.to_string())?;
-            println!("scene:    {}", scene.name());
-            let mut effects = plan.requested.clone();
-            for e in &configured.effects {
-                if !effects.contains(e) {
-                    effects.push(e.clone());
-                }
-            }
-            println!("effects:  {}", effects.join(", "));
-            let phases: Vec<&str> = plan.schedule.iter().map(|p| p.name()).collect();
-            println!("schedule: {}", phases.join(" -> "));
-            for d in &descriptions {
-                println!("node:     {} {} ({})", d.name, d.version, d.kind);
-            }
-            println!("beads:    {:?}", configured.beads_per_fibre);
-            println!(
-                "steps:    {} x dt {}",
-                scene.scene.time.steps, scene.scene.time.dt
-            );
-            if let Some(f) = scene.fields_summary() {
-                println!("fields:   {f}");
-            }
-            for g in &scene.groups.lines {
-                println!("group:    {g}");
-            }
-            for (name, limit) in &configured.time_step_limits {
-                println!("limit:    {name}: dt <= {limit:.6e}");
-            }
-            for (name, v) in &configured.derived {
-                println!("derived:  {name} = {v:.6e}");
-            }
-            for n in &configured.notes {
-                println!("note:     {n}");
-            }
-            println!("ok: the scene is valid; nothing was run");
-            Ok(())
-        }
+        Cmd::Check { config, set } => check(config.as_deref(), &set),
         Cmd::Describe { in_process, json } => {
             let all = runner::describe_all(in_process).map_err(|e| e.to_string())?;
             for d in all {
@@ -231,63 +181,134 @@ fn execute(cmd: Cmd) -> Result<(), String> {
             replot,
             jobs,
             check: false,
-        } => {
-            let exe = std::env::current_exe()
-                .map_err(|e| format!("cannot find this executable for --jobs: {e}"))?;
-            let runs = match (replot, jobs) {
-                (true, 1) => study::Runs::Reuse,
-                (true, _) => return Err("--replot runs nothing: leave out --jobs".into()),
-                (false, 1) => study::Runs::OneByOne,
-                (false, j) => study::Runs::Parallel {
-                    exe: &exe,
-                    jobs: j as usize,
-                },
-            };
-            let report =
-                study::run_file(&study, out.as_deref(), runs).map_err(|e| e.to_string())?;
-            println!("{report}");
-            Ok(())
-        }
-        Cmd::Export { run, out, topic } => {
-            let log = export::log_path(&run)?;
-            let damage = match topic {
-                Some(topic) => {
-                    use std::io::Write;
-                    let (messages, damage) = coordinator::mcap_log::salvage_topic(&log, &topic)?;
-                    if messages.is_empty() && damage.is_none() {
-                        return Err(format!("{} has no messages on {topic}", log.display()));
-                    }
-                    let mut stdout = std::io::stdout().lock();
-                    for m in messages {
-                        writeln!(stdout, "{m}").map_err(|e| format!("cannot print: {e}"))?;
-                    }
-                    damage
-                }
-                None => {
-                    let dir = out.unwrap_or_else(|| log.parent().unwrap_or(&run).to_path_buf());
-                    let done = export::export(&log, &dir)?;
-                    for (path, rows) in &done.files {
-                        match path.extension().is_some_and(|e| e == "csv") {
-                            true => println!(
-                                "wrote {} ({rows} row{})",
-                                path.display(),
-                                if *rows == 1 { "" } else { "s" }
-                            ),
-                            false => println!("wrote {}", path.display()),
-                        }
-                    }
-                    done.damage
-                }
-            };
-            if let Some(e) = damage {
-                eprintln!(
-                    "warning: {} breaks off ({e}): exported what was logged before the break",
-                    log.display()
-                );
-            }
-            Ok(())
-        }
+        } => run_study(&study, out.as_deref(), replot, jobs),
+        Cmd::Export { run, out, topic } => export_run(&run, out, topic.as_deref()),
     }
+}
+
+/// `coordinator run`: the scene (the built-in example without a file), its result printed.
+fn run(
+    config: Option<&std::path::Path>,
+    set: &[String],
+    opts: &runner::RunOptions,
+) -> Result<(), String> {
+    let scene = scene::load(config, set).map_err(|e| e.to_string())?;
+    let out = &opts.out;
+    let result = runner::run(&scene, opts)
+        .map_err(|e| format!("{e}\n(the log written so far is in {})", out.display()))?;
+    print_result(&result.summary, out);
+    if result.summary["status"] == "interrupted" {
+        return Err(format!(
+            "interrupted at step {} (Ctrl-C); the log and summary so far are in {}",
+            result.summary["steps"],
+            out.display()
+        ));
+    }
+    Ok(())
+}
+
+/// `coordinator check`: the scene validated by every node it needs, and what it would run.
+fn check(config: Option<&std::path::Path>, set: &[String]) -> Result<(), String> {
+    let scene = scene::load(config, set).map_err(|e| e.to_string())?;
+    let (plan, configured, descriptions) = runner::check(&scene).map_err(|e| e.to_string())?;
+    println!("scene:    {}", scene.name());
+    println!("effects:  {}", plan.effects(&configured.effects).join(", "));
+    let phases: Vec<&str> = plan.schedule.iter().map(|p| p.name()).collect();
+    println!("schedule: {}", phases.join(" -> "));
+    for d in &descriptions {
+        println!("node:     {} {} ({})", d.name, d.version, d.kind);
+    }
+    println!("beads:    {:?}", configured.beads_per_fibre);
+    println!(
+        "steps:    {} x dt {}",
+        scene.scene.time.steps, scene.scene.time.dt
+    );
+    if let Some(f) = scene.fields_summary() {
+        println!("fields:   {f}");
+    }
+    for g in &scene.groups.lines {
+        println!("group:    {g}");
+    }
+    for (name, limit) in &configured.time_step_limits {
+        println!("limit:    {name}: dt <= {limit:.6e}");
+    }
+    for (name, v) in &configured.derived {
+        println!("derived:  {name} = {v:.6e}");
+    }
+    for n in &configured.notes {
+        println!("note:     {n}");
+    }
+    println!("ok: the scene is valid; nothing was run");
+    Ok(())
+}
+
+/// `coordinator study`: every variant run (or reused with `--replot`), the report printed.
+fn run_study(
+    study: &std::path::Path,
+    out: Option<&std::path::Path>,
+    replot: bool,
+    jobs: u16,
+) -> Result<(), String> {
+    let exe = std::env::current_exe()
+        .map_err(|e| format!("cannot find this executable for --jobs: {e}"))?;
+    let runs = match (replot, jobs) {
+        (true, 1) => study::Runs::Reuse,
+        (true, _) => return Err("--replot runs nothing: leave out --jobs".into()),
+        (false, 1) => study::Runs::OneByOne,
+        (false, j) => study::Runs::Parallel {
+            exe: &exe,
+            jobs: j as usize,
+        },
+    };
+    let report = study::run_file(study, out, runs).map_err(|e| e.to_string())?;
+    println!("{report}");
+    Ok(())
+}
+
+/// `coordinator export`: a run's log as CSV files and its scene, or one topic as JSON lines;
+/// a log cut short is exported up to its break, with a warning.
+fn export_run(
+    run: &std::path::Path,
+    out: Option<PathBuf>,
+    topic: Option<&str>,
+) -> Result<(), String> {
+    let log = export::log_path(run)?;
+    let damage = match topic {
+        Some(topic) => {
+            use std::io::Write;
+            let (messages, damage) = coordinator::mcap_log::salvage_topic(&log, topic)?;
+            if messages.is_empty() && damage.is_none() {
+                return Err(format!("{} has no messages on {topic}", log.display()));
+            }
+            let mut stdout = std::io::stdout().lock();
+            for m in messages {
+                writeln!(stdout, "{m}").map_err(|e| format!("cannot print: {e}"))?;
+            }
+            damage
+        }
+        None => {
+            let dir = out.unwrap_or_else(|| log.parent().unwrap_or(run).to_path_buf());
+            let done = export::export(&log, &dir)?;
+            for (path, rows) in &done.files {
+                match path.extension().is_some_and(|e| e == "csv") {
+                    true => println!(
+                        "wrote {} ({rows} row{})",
+                        path.display(),
+                        if *rows == 1 { "" } else { "s" }
+                    ),
+                    false => println!("wrote {}", path.display()),
+                }
+            }
+            done.damage
+        }
+    };
+    if let Some(e) = damage {
+        eprintln!(
+            "warning: {} breaks off ({e}): exported what was logged before the break",
+            log.display()
+        );
+    }
+    Ok(())
 }
 
 fn print_result(summary: &serde_json::Value, out: &std::path::Path) {

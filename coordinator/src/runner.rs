@@ -577,12 +577,7 @@ fn drive(
                 .ok_or_else(|| fail(format!("no node of kind `{}` runs the phase {p}", p.node())))
         })
         .collect::<Result<_, _>>()?;
-    st.effects = plan.requested.clone();
-    for e in &st.configured.effects {
-        if !st.effects.contains(e) {
-            st.effects.push(e.clone());
-        }
-    }
+    st.effects = plan.effects(&st.configured.effects);
     let schedule_names: Vec<String> = plan.schedule.iter().map(|p| p.name().to_string()).collect();
     if opts.verbose {
         announce(scene, opts, &schedule_names, prefix, st);

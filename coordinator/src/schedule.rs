@@ -16,6 +16,20 @@ pub struct Plan {
     pub nodes: Vec<&'static str>,
 }
 
+impl Plan {
+    /// The effects the run has: those the scene asks for, then those the nodes added when
+    /// configured (`node_effects`), each once.
+    pub fn effects(&self, node_effects: &[String]) -> Vec<String> {
+        let mut effects = self.requested.clone();
+        for e in node_effects {
+            if !effects.contains(e) {
+                effects.push(e.clone());
+            }
+        }
+        effects
+    }
+}
+
 /// Derive the plan, or say exactly what is missing.
 pub fn plan(scene: &LoadedScene) -> Result<Plan, String> {
     let s = &scene.scene;
