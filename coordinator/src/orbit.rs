@@ -473,6 +473,86 @@ pub fn analyse_series(
     shear_rate: f64,
 ) -> Result<OrbitAnalysis, OrbitError> {
     let gamma = shear_rate;
+    let n = usable_samples(s, beads, gamma)?;
+    let (t, th, r) = (&s.times[..n], &s.theta[..n], &s.end_to_end_ratio[..n]);
+    let tail = Tail::of(t, th, beads, gamma);
+    let folds = Folds::of(r, th);
+
+    // Half-turns between successive passes through 90 deg.
+    let crossings = reference_crossings(t, th);
+    let half_turns: Vec<HalfTurn> = crossings
+        .windows(2)
+        .map(|w| half_turn(t, th, r, &folds.state, w[0], w[1]))
+        .collect();
+    let half_turn_period = (crossings.len() >= 2)
+        .then(|| (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64);
+    let period_gamma = half_turn_period.map(|p| gamma * p);
+    // gamma T = pi (r + 1/r): r = (x + sqrt(x^2 - 4)) / 2 with x = gamma T / pi >= 2.
+    let period_aspect_ratio = period_gamma
+        .map(|g| g / PI)
+        .filter(|&x| x >= 2.0)
+        .map(|x| 2.0 / (x + (x * x - 4.0).sqrt()));
+
+    let jeffery_fit = if tail.stuck {
+        None
+    } else {
+        let omega = angular_velocity(t, th);
+        fit_jeffery(&th[1..n - 1], &omega[1..n - 1], gamma)
+    };
+
+    let (min_ratio, max_ratio) = r
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    let (kind, reason) = classify(&tail, &folds, min_ratio, beads);
+    // A label is only as good as the run is long: a straight fibre that has not yet turned
+    // through a half-turn may still fold or stick further on.
+    let net_rotation_deg = (th[n - 1] - th[0]).to_degrees();
+    let reason = if !tail.stuck && net_rotation_deg.abs() < 180.0 {
+        format!(
+            "{reason}; the run turned the fibre through {:.0} deg only, less than a \
+             half-turn: a longer run may still fold or stick",
+            net_rotation_deg.abs()
+        )
+    } else {
+        reason
+    };
+    let stuck_kind = tail.stuck.then(|| {
+        if r[tail.start..].iter().any(|&x| x < FOLD_RATIO) {
+            "s-stuck"
+        } else {
+            "jeffery-stuck"
+        }
+    });
+
+    Ok(OrbitAnalysis {
+        kind,
+        stuck_kind,
+        stuck_angle_deg: tail.stuck.then(|| direction_deg(th[n - 1])),
+        net_rotation_deg,
+        tail_rate_deg: tail.rate.to_degrees(),
+        stuck_threshold_deg: tail.threshold.to_degrees(),
+        tail_rate_trend: tail.trend,
+        half_turns,
+        half_turn_period,
+        period_gamma,
+        period_aspect_ratio,
+        jeffery_fit,
+        min_ratio,
+        max_ratio,
+        final_ratio: r[n - 1],
+        folds: folds.folds,
+        straightenings: folds.straightenings,
+        last_fold_rotation_deg: folds.last_fold_rotation_deg,
+        reason,
+    })
+}
+
+/// How many samples of `s` the analysis can use (the common length of its vectors), or why
+/// it cannot: a bad shear rate, fewer than 2 beads or 3 samples, a value that is not finite,
+/// times that do not increase.
+fn usable_samples(s: &OrientationSeries, beads: usize, gamma: f64) -> Result<usize, OrbitError> {
     if !(gamma.is_finite() && gamma > 0.0) {
         return Err(OrbitError::BadShearRate(gamma));
     }
@@ -495,179 +575,171 @@ pub fn analyse_series(
     if let Some(i) = (1..n).find(|&i| t[i] <= t[i - 1]) {
         return Err(OrbitError::TimeNotIncreasing(i));
     }
+    Ok(n)
+}
 
-    // Stuck: mean rate over the tail against the slowest free Jeffery rate (S2023 eq. 19 at
-    // theta = 0 with r_c = 1/N).
-    let tail_start = t[n - 1] - STUCK_TAIL_FRACTION * (t[n - 1] - t[0]);
-    let i_tail = t
-        .iter()
-        .position(|&x| x >= tail_start)
-        .unwrap_or(0)
-        .min(n - 2);
-    let tail_rate = (th[n - 1] - th[i_tail]) / (t[n - 1] - t[i_tail]);
-    let rc_geo = 1.0 / beads as f64;
-    let threshold = STUCK_RATE_FRACTION * gamma * rc_geo * rc_geo / (1.0 + rc_geo * rc_geo);
-    let stuck = tail_rate.abs() < threshold;
-    // The tail in two halves: is the rate falling (settling) or steady (creeping)?
-    let i_mid = t
-        .iter()
-        .position(|&x| x >= 0.5 * (t[i_tail] + t[n - 1]))
-        .unwrap_or(n - 1)
-        .clamp(i_tail + 1, n - 1);
-    let rate = |a: usize, b: usize| (th[b] - th[a]) / (t[b] - t[a]);
-    let (early, late) = if i_mid < n - 1 {
-        (rate(i_tail, i_mid), rate(i_mid, n - 1))
-    } else {
-        (tail_rate, tail_rate)
-    };
-    let tail_rate_trend = (early != 0.0).then(|| late / early);
-    let creeping =
-        stuck && tail_rate_trend.is_some_and(|x| x >= CREEP_TREND) && late.abs() >= 0.1 * threshold;
+/// The stuck test on the run's tail (its last [`STUCK_TAIL_FRACTION`]): the mean rotation
+/// rate there against the slowest free Jeffery rate (S2023 eq. 19 at theta = 0 with
+/// r_c = 1/N), and whether a stuck fibre is settling or creeping.
+struct Tail {
+    /// First sample of the tail.
+    start: usize,
+    /// Mean rotation rate over the tail (rad per time unit).
+    rate: f64,
+    /// [`STUCK_RATE_FRACTION`] of the slowest free Jeffery rate.
+    threshold: f64,
+    stuck: bool,
+    /// The rate over the tail's second half over that over its first half.
+    trend: Option<f64>,
+    /// Stuck, but the rate is not falling: a steady creep.
+    creeping: bool,
+    /// The rates over the tail's first and second halves.
+    early: f64,
+    late: f64,
+}
 
-    // Folds and straightenings, with hysteresis between the two thresholds.
-    let (mut folded, mut folds, mut straightenings) = (false, 0usize, 0usize);
-    let mut fold_start = 0usize;
-    let mut last_fold: Option<(usize, usize)> = None;
-    let mut state = Vec::with_capacity(n);
-    for (i, &ri) in r.iter().enumerate() {
-        if !folded && ri < FOLD_RATIO {
-            folded = true;
-            folds += 1;
-            fold_start = i;
-        } else if folded && ri >= STRAIGHT_RATIO {
-            folded = false;
-            straightenings += 1;
-            last_fold = Some((fold_start, i));
+impl Tail {
+    fn of(t: &[f64], th: &[f64], beads: usize, gamma: f64) -> Self {
+        let n = t.len();
+        let tail_start = t[n - 1] - STUCK_TAIL_FRACTION * (t[n - 1] - t[0]);
+        let start = t
+            .iter()
+            .position(|&x| x >= tail_start)
+            .unwrap_or(0)
+            .min(n - 2);
+        let rate = (th[n - 1] - th[start]) / (t[n - 1] - t[start]);
+        let rc_geo = 1.0 / beads as f64;
+        let threshold = STUCK_RATE_FRACTION * gamma * rc_geo * rc_geo / (1.0 + rc_geo * rc_geo);
+        let stuck = rate.abs() < threshold;
+        // The tail in two halves: is the rate falling (settling) or steady (creeping)?
+        let mid = t
+            .iter()
+            .position(|&x| x >= 0.5 * (t[start] + t[n - 1]))
+            .unwrap_or(n - 1)
+            .clamp(start + 1, n - 1);
+        let rate_over = |a: usize, b: usize| (th[b] - th[a]) / (t[b] - t[a]);
+        let (early, late) = if mid < n - 1 {
+            (rate_over(start, mid), rate_over(mid, n - 1))
+        } else {
+            (rate, rate)
+        };
+        let trend = (early != 0.0).then(|| late / early);
+        let creeping =
+            stuck && trend.is_some_and(|x| x >= CREEP_TREND) && late.abs() >= 0.1 * threshold;
+        Self {
+            start,
+            rate,
+            threshold,
+            stuck,
+            trend,
+            creeping,
+            early,
+            late,
         }
-        state.push(folded);
     }
-    if folded {
-        last_fold = Some((fold_start, n - 1));
+}
+
+/// Folds and straightenings of the end-to-end ratio `r`, with hysteresis between
+/// [`FOLD_RATIO`] and [`STRAIGHT_RATIO`].
+struct Folds {
+    /// Whether the fibre is folded at each sample.
+    state: Vec<bool>,
+    folds: usize,
+    straightenings: usize,
+    /// How far the fibre turned during its last fold (degrees).
+    last_fold_rotation_deg: Option<f64>,
+}
+
+impl Folds {
+    fn of(r: &[f64], th: &[f64]) -> Self {
+        let (mut folded, mut folds, mut straightenings) = (false, 0usize, 0usize);
+        let mut fold_start = 0usize;
+        let mut last_fold: Option<(usize, usize)> = None;
+        let mut state = Vec::with_capacity(r.len());
+        for (i, &ri) in r.iter().enumerate() {
+            if !folded && ri < FOLD_RATIO {
+                folded = true;
+                folds += 1;
+                fold_start = i;
+            } else if folded && ri >= STRAIGHT_RATIO {
+                folded = false;
+                straightenings += 1;
+                last_fold = Some((fold_start, i));
+            }
+            state.push(folded);
+        }
+        if folded {
+            last_fold = Some((fold_start, r.len() - 1));
+        }
+        Self {
+            state,
+            folds,
+            straightenings,
+            last_fold_rotation_deg: last_fold.map(|(a, b)| (th[b] - th[a]).abs().to_degrees()),
+        }
     }
-    let last_fold_rotation = last_fold.map(|(a, b)| (th[b] - th[a]).abs().to_degrees());
+}
 
-    // Half-turns between successive passes through 90 deg.
-    let crossings = reference_crossings(t, th);
-    let half_turns: Vec<HalfTurn> = crossings
-        .windows(2)
-        .map(|w| half_turn(t, th, r, &state, w[0], w[1]))
-        .collect();
-    let half_turn_period = (crossings.len() >= 2)
-        .then(|| (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64);
-    let period_gamma = half_turn_period.map(|p| gamma * p);
-    // gamma T = pi (r + 1/r): r = (x + sqrt(x^2 - 4)) / 2 with x = gamma T / pi >= 2.
-    let period_aspect_ratio = period_gamma
-        .map(|g| g / PI)
-        .filter(|&x| x >= 2.0)
-        .map(|x| 2.0 / (x + (x * x - 4.0).sqrt()));
-
-    let jeffery_fit = if stuck {
-        None
-    } else {
-        let omega = angular_velocity(t, th);
-        fit_jeffery(&th[1..n - 1], &omega[1..n - 1], gamma)
-    };
-
-    let (min_ratio, max_ratio) = r
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-            (a.min(x), b.max(x))
-        });
-    let fold_text = |d: f64| format!("{d:.1} deg");
-    let (kind, reason) = if stuck {
-        (
-            OrbitKind::Stuck,
+/// The orbit of S2023 section IV C and the reason, with the numbers it rests on: stuck by
+/// the tail's rate; else jeffery without a fold; s-coiled where the fibre never
+/// straightened or its last fold lasted a half-turn; else s-turn.
+fn classify(tail: &Tail, folds: &Folds, min_ratio: f64, beads: usize) -> (OrbitKind, String) {
+    let last_fold = folds.last_fold_rotation_deg;
+    let fold_text = |d: Option<f64>| format!("{:.1} deg", d.unwrap_or(0.0));
+    if tail.stuck {
+        let creep = if tail.creeping {
             format!(
-                "mean rate over the last {:.0} % of the run {:.3e} deg per time unit < {:.3e} \
-                 ({} x the slowest Jeffery rate for r_c = 1/{beads})",
-                100.0 * STUCK_TAIL_FRACTION,
-                tail_rate.abs().to_degrees(),
-                threshold.to_degrees(),
-                STUCK_RATE_FRACTION
-            ) + &if creeping {
-                format!(
-                    "; but the rate is not falling ({:.3e} deg per time unit over the last \
-                     half of that, {:.3e} before): a steady creep, not settling at an angle; \
-                     a longer run may see it turn on",
-                    late.abs().to_degrees(),
-                    early.abs().to_degrees()
-                )
-            } else {
-                String::new()
-            },
-        )
-    } else if folds == 0 {
+                "; but the rate is not falling ({:.3e} deg per time unit over the last \
+                 half of that, {:.3e} before): a steady creep, not settling at an angle; \
+                 a longer run may see it turn on",
+                tail.late.abs().to_degrees(),
+                tail.early.abs().to_degrees()
+            )
+        } else {
+            String::new()
+        };
+        let reason = format!(
+            "mean rate over the last {:.0} % of the run {:.3e} deg per time unit < {:.3e} \
+             ({} x the slowest Jeffery rate for r_c = 1/{beads})",
+            100.0 * STUCK_TAIL_FRACTION,
+            tail.rate.abs().to_degrees(),
+            tail.threshold.to_degrees(),
+            STUCK_RATE_FRACTION
+        );
+        (OrbitKind::Stuck, reason + &creep)
+    } else if folds.folds == 0 {
         (
             OrbitKind::Jeffery,
             format!("end-to-end / contour stays >= {min_ratio:.4} (fold threshold {FOLD_RATIO})"),
         )
-    } else if straightenings == 0 {
+    } else if folds.straightenings == 0 {
         (
             OrbitKind::SCoiled,
             format!(
                 "folded below {FOLD_RATIO} and never back above {STRAIGHT_RATIO} (turned {} while folded)",
-                fold_text(last_fold_rotation.unwrap_or(0.0))
+                fold_text(last_fold)
             ),
         )
-    } else if last_fold_rotation.is_some_and(|d| d >= 180.0) {
+    } else if last_fold.is_some_and(|d| d >= 180.0) {
         (
             OrbitKind::SCoiled,
             format!(
                 "the last fold lasted a half-turn or more ({}) without straightening",
-                fold_text(last_fold_rotation.unwrap_or(0.0))
+                fold_text(last_fold)
             ),
         )
     } else {
         (
             OrbitKind::STurn,
             format!(
-                "{folds} folds below {FOLD_RATIO}, {straightenings} straightenings above \
+                "{} folds below {FOLD_RATIO}, {} straightenings above \
                  {STRAIGHT_RATIO}; the last fold lasted {}",
-                fold_text(last_fold_rotation.unwrap_or(0.0))
+                folds.folds,
+                folds.straightenings,
+                fold_text(last_fold)
             ),
         )
-    };
-    // A label is only as good as the run is long: a straight fibre that has not yet turned
-    // through a half-turn may still fold or stick further on.
-    let net_rotation_deg = (th[n - 1] - th[0]).to_degrees();
-    let reason = if !stuck && net_rotation_deg.abs() < 180.0 {
-        format!(
-            "{reason}; the run turned the fibre through {:.0} deg only, less than a \
-             half-turn: a longer run may still fold or stick",
-            net_rotation_deg.abs()
-        )
-    } else {
-        reason
-    };
-    let stuck_kind = stuck.then(|| {
-        if r[i_tail..].iter().any(|&x| x < FOLD_RATIO) {
-            "s-stuck"
-        } else {
-            "jeffery-stuck"
-        }
-    });
-
-    Ok(OrbitAnalysis {
-        kind,
-        stuck_kind,
-        stuck_angle_deg: stuck.then(|| direction_deg(th[n - 1])),
-        net_rotation_deg,
-        tail_rate_deg: tail_rate.to_degrees(),
-        stuck_threshold_deg: threshold.to_degrees(),
-        tail_rate_trend,
-        half_turns,
-        half_turn_period,
-        period_gamma,
-        period_aspect_ratio,
-        jeffery_fit,
-        min_ratio,
-        max_ratio,
-        final_ratio: r[n - 1],
-        folds,
-        straightenings,
-        last_fold_rotation_deg: last_fold_rotation,
-        reason,
-    })
+    }
 }
 
 /// Shape statistics of the half-turn between times `a` and `b`; `folded` is the fold state
