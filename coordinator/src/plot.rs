@@ -378,12 +378,11 @@ pub fn orbit(
     geometric: f64,
     reference: Option<(f64, &str)>,
 ) -> Result<(), String> {
-    use crate::orbit_report::jeffery_omega_over_gamma;
     register_font();
     if rows.is_empty() {
         return Err("nothing to plot: the orbit has no samples".into());
     }
-    let e = |e: DrawingAreaErrorKind<_>| format!("plotting {}: {e:?}", path.display());
+    let e = drawing_error(path);
     let root = BitMapBackend::new(path, (900, 1450)).into_drawing_area();
     root.fill(&WHITE).map_err(e)?;
     let root = root.titled(title, ("sans-serif", 22)).map_err(e)?;
@@ -393,36 +392,68 @@ pub fn orbit(
         [] as [i32; 0],
         [0.27, 0.54, 0.81].map(|f| (f * h).round() as i32),
     );
-    let finite = |v: &[f64]| {
-        v.iter()
-            .copied()
-            .filter(|x| x.is_finite())
-            .fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)))
-    };
-    let padded = |(lo, hi): (f64, f64), min_span: f64| {
-        let span = (hi - lo).max(min_span);
-        let mid = 0.5 * (lo + hi);
-        (mid - 0.55 * span, mid + 0.55 * span)
-    };
-    let grid_t = |gt: &[f64]| {
-        let (a, b) = finite(gt);
-        (a, if b > a { b } else { a + 1.0 })
-    };
-    let line = |r: f64| -> Vec<(f64, f64)> {
-        (0..=360)
-            .map(|i| {
-                let th = -90.0 + 0.5 * i as f64;
-                (th, jeffery_omega_over_gamma(r, th))
-            })
-            .collect()
-    };
+    let (t0, t1) = finite_range(&rows.gamma_t);
+    let gamma_t = (t0, if t1 > t0 { t1 } else { t0 + 1.0 });
+    omega_panel(&panels[0], path, rows, fit, geometric, reference)?;
+    direction_panel(&panels[1], path, rows, gamma_t)?;
+    end_to_end_panel(&panels[2], path, rows, gamma_t)?;
+    if !shapes.is_empty() {
+        shapes_panel(&panels[3], path, shapes, gamma_t)?;
+    }
+    root.present().map_err(e)?;
+    Ok(())
+}
 
-    // (a) omega / gamma against the direction: S2023 Fig. 5a.
-    let (w0, w1) = finite(&rows.omega_over_gamma);
+/// One area of a drawing (a panel of a plot).
+type Area<'b> = DrawingArea<BitMapBackend<'b>, plotters::coord::Shift>;
+
+/// A drawing error as the message a plot of `path` returns.
+fn drawing_error<E: std::error::Error + Send + Sync>(
+    path: &Path,
+) -> impl Fn(DrawingAreaErrorKind<E>) -> String + Copy + '_ {
+    move |e| format!("plotting {}: {e:?}", path.display())
+}
+
+/// Smallest and largest finite value of `v`.
+fn finite_range(v: &[f64]) -> (f64, f64) {
+    v.iter()
+        .copied()
+        .filter(|x| x.is_finite())
+        .fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)))
+}
+
+/// `(lo, hi)` widened to at least `min_span`, with 5 % room either side.
+fn padded((lo, hi): (f64, f64), min_span: f64) -> (f64, f64) {
+    let span = (hi - lo).max(min_span);
+    let mid = 0.5 * (lo + hi);
+    (mid - 0.55 * span, mid + 0.55 * span)
+}
+
+/// S2023 eq. 19 for aspect ratio `r_c`: `omega / gamma` over the directions -90 to 90 deg.
+fn jeffery_line(r_c: f64) -> Vec<(f64, f64)> {
+    (0..=360)
+        .map(|i| {
+            let th = -90.0 + 0.5 * i as f64;
+            (th, crate::orbit_report::jeffery_omega_over_gamma(r_c, th))
+        })
+        .collect()
+}
+
+/// Panel (a) of [`orbit`]: `omega / gamma` against the direction, S2023 Fig. 5a.
+fn omega_panel(
+    area: &Area,
+    path: &Path,
+    rows: &crate::orbit_report::OrbitRows,
+    fit: Option<f64>,
+    geometric: f64,
+    reference: Option<(f64, &str)>,
+) -> Result<(), String> {
+    let e = drawing_error(path);
+    let (w0, w1) = finite_range(&rows.omega_over_gamma);
     let (w0, w1) = padded((w0.min(-1.0), w1.max(0.0)), 0.1);
     // Room above the curves for the legend.
     let w1 = w1 + 0.3 * (w1 - w0);
-    let mut chart = panel(&panels[0])
+    let mut chart = panel(area)
         .build_cartesian_2d(-90.0..90.0, w0..w1)
         .map_err(e)?;
     chart
@@ -446,14 +477,14 @@ pub fn orbit(
         .legend(|(x, y)| Circle::new((x, y), 4, BLUE.filled()));
     if let Some(r) = fit {
         chart
-            .draw_series(LineSeries::new(line(r), RED.stroke_width(2)))
+            .draw_series(LineSeries::new(jeffery_line(r), RED.stroke_width(2)))
             .map_err(e)?
             .label(format!("S2023 eq. 19, fitted r_c = {r:.3}"))
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
     }
     chart
         .draw_series(DashedLineSeries::new(
-            line(geometric),
+            jeffery_line(geometric),
             6,
             4,
             BLACK.stroke_width(1),
@@ -464,7 +495,12 @@ pub fn orbit(
     if let Some((r, source)) = reference {
         let green = RGBColor(44, 160, 44);
         chart
-            .draw_series(DashedLineSeries::new(line(r), 10, 5, green.stroke_width(2)))
+            .draw_series(DashedLineSeries::new(
+                jeffery_line(r),
+                10,
+                5,
+                green.stroke_width(2),
+            ))
             .map_err(e)?
             .label(format!("S2023 eq. 19, r_c = {r:.3} ({source})"))
             .legend(move |(x, y)| {
@@ -472,10 +508,18 @@ pub fn orbit(
             });
     }
     legend!(chart, e, SeriesLabelPosition::UpperLeft);
+    Ok(())
+}
 
-    // (b) the direction against gamma t.
-    let (t0, t1) = grid_t(&rows.gamma_t);
-    let mut chart = panel(&panels[1])
+/// Panel (b) of [`orbit`]: the direction against `gamma t` over `(t0, t1)`.
+fn direction_panel(
+    area: &Area,
+    path: &Path,
+    rows: &crate::orbit_report::OrbitRows,
+    (t0, t1): (f64, f64),
+) -> Result<(), String> {
+    let e = drawing_error(path);
+    let mut chart = panel(area)
         .build_cartesian_2d(t0..t1, -90.0..90.0)
         .map_err(e)?;
     chart
@@ -493,13 +537,22 @@ pub fn orbit(
                 .map(|(&t, &d)| Circle::new((t, d), 1, BLUE.filled())),
         )
         .map_err(e)?;
+    Ok(())
+}
 
-    // (c) the end-to-end distance against gamma t, with the fold threshold of the orbit.
-    let (r0, r1) = finite(&rows.end_to_end);
-    let (r0, r1) = padded((r0.min(crate::orbit::FOLD_RATIO), r1.max(1.0)), 0.02);
-    let mut chart = panel(&panels[2])
-        .build_cartesian_2d(t0..t1, r0..r1)
-        .map_err(e)?;
+/// Panel (c) of [`orbit`]: the end-to-end distance against `gamma t` over `(t0, t1)`, with
+/// the orbit analysis's fold threshold.
+fn end_to_end_panel(
+    area: &Area,
+    path: &Path,
+    rows: &crate::orbit_report::OrbitRows,
+    (t0, t1): (f64, f64),
+) -> Result<(), String> {
+    let e = drawing_error(path);
+    let fold = crate::orbit::FOLD_RATIO;
+    let (r0, r1) = finite_range(&rows.end_to_end);
+    let (r0, r1) = padded((r0.min(fold), r1.max(1.0)), 0.02);
+    let mut chart = panel(area).build_cartesian_2d(t0..t1, r0..r1).map_err(e)?;
     chart
         .configure_mesh()
         .x_desc("gamma t")
@@ -517,7 +570,6 @@ pub fn orbit(
             BLUE.stroke_width(2),
         ))
         .map_err(e)?;
-    let fold = crate::orbit::FOLD_RATIO;
     chart
         .draw_series(DashedLineSeries::new(
             vec![(t0, fold), (t1, fold)],
@@ -533,63 +585,70 @@ pub fn orbit(
             ("sans-serif", 14).into_font().color(&RED),
         )))
         .map_err(e)?;
+    Ok(())
+}
 
-    // (d) the shapes, each centred on its gamma t, to one scale on both axes.
-    if !shapes.is_empty() {
-        let contour = |c: &[[f64; 2]]| -> f64 {
-            c.windows(2)
-                .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
-                .sum()
-        };
-        let longest = shapes
+/// Panel (d) of [`orbit`]: the shapes, each centred on its `gamma t` within `(t0, t1)`, to
+/// one scale on both axes, first bead marked.
+fn shapes_panel(
+    area: &Area,
+    path: &Path,
+    shapes: &[(f64, Vec<[f64; 2]>)],
+    (t0, t1): (f64, f64),
+) -> Result<(), String> {
+    let e = drawing_error(path);
+    let contour = |c: &[[f64; 2]]| -> f64 {
+        c.windows(2)
+            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+            .sum()
+    };
+    let longest = shapes
+        .iter()
+        .map(|(_, c)| contour(c))
+        .fold(0.0, f64::max)
+        .max(1e-12);
+    let spacing = (t1 - t0) / shapes.len().max(2).saturating_sub(1) as f64;
+    let scale = 0.85 * spacing / longest;
+    let (x0, x1) = (t0 - 0.5 * spacing, t1 + 0.5 * spacing);
+    // The plotting area's size in pixels: the panel less margins and label areas.
+    let (w, h) = area.dim_in_pixel();
+    let (pw, ph) = (
+        w.saturating_sub(2 * PANEL_MARGIN + PANEL_Y_LABELS).max(1) as f64,
+        h.saturating_sub(2 * PANEL_MARGIN + PANEL_X_LABELS).max(1) as f64,
+    );
+    let half = 0.5 * (x1 - x0) * ph / pw;
+    let mut chart = panel(area)
+        .build_cartesian_2d(x0..x1, -half..half)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .disable_y_mesh()
+        .x_desc("gamma t (shapes to scale, first bead marked)")
+        .y_desc("fibre shape")
+        .y_labels(0)
+        .label_style(("sans-serif", 15))
+        .draw()
+        .map_err(e)?;
+    for (gt, centres) in shapes {
+        let n = centres.len().max(1) as f64;
+        let cx = centres.iter().map(|p| p[0]).sum::<f64>() / n;
+        let cy = centres.iter().map(|p| p[1]).sum::<f64>() / n;
+        let pts: Vec<(f64, f64)> = centres
             .iter()
-            .map(|(_, c)| contour(c))
-            .fold(0.0, f64::max)
-            .max(1e-12);
-        let spacing = (t1 - t0) / shapes.len().max(2).saturating_sub(1) as f64;
-        let scale = 0.85 * spacing / longest;
-        let (x0, x1) = (t0 - 0.5 * spacing, t1 + 0.5 * spacing);
-        // The plotting area's size in pixels: the panel less margins and label areas.
-        let (w, h) = panels[3].dim_in_pixel();
-        let (pw, ph) = (
-            w.saturating_sub(2 * PANEL_MARGIN + PANEL_Y_LABELS).max(1) as f64,
-            h.saturating_sub(2 * PANEL_MARGIN + PANEL_X_LABELS).max(1) as f64,
-        );
-        let half = 0.5 * (x1 - x0) * ph / pw;
-        let mut chart = panel(&panels[3])
-            .build_cartesian_2d(x0..x1, -half..half)
+            .map(|p| (gt + scale * (p[0] - cx), scale * (p[1] - cy)))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(pts.clone(), BLUE.stroke_width(2)))
             .map_err(e)?;
         chart
-            .configure_mesh()
-            .disable_y_mesh()
-            .x_desc("gamma t (shapes to scale, first bead marked)")
-            .y_desc("fibre shape")
-            .y_labels(0)
-            .label_style(("sans-serif", 15))
-            .draw()
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 2, BLUE.filled())))
             .map_err(e)?;
-        for (gt, centres) in shapes {
-            let n = centres.len().max(1) as f64;
-            let cx = centres.iter().map(|p| p[0]).sum::<f64>() / n;
-            let cy = centres.iter().map(|p| p[1]).sum::<f64>() / n;
-            let pts: Vec<(f64, f64)> = centres
-                .iter()
-                .map(|p| (gt + scale * (p[0] - cx), scale * (p[1] - cy)))
-                .collect();
+        if let Some(&first) = pts.first() {
             chart
-                .draw_series(LineSeries::new(pts.clone(), BLUE.stroke_width(2)))
+                .draw_series(std::iter::once(Circle::new(first, 4, RED.filled())))
                 .map_err(e)?;
-            chart
-                .draw_series(pts.iter().map(|&p| Circle::new(p, 2, BLUE.filled())))
-                .map_err(e)?;
-            if let Some(&first) = pts.first() {
-                chart
-                    .draw_series(std::iter::once(Circle::new(first, 4, RED.filled())))
-                    .map_err(e)?;
-            }
         }
     }
-    root.present().map_err(e)?;
     Ok(())
 }
 
