@@ -471,40 +471,10 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, runs: Runs) -> Result<S
     }
     let mut rows = Vec::new();
     for (i, v) in prepared.into_iter().enumerate() {
-        let Variant {
-            label,
-            scene,
-            run_dir,
-            resolution,
-            ..
-        } = v;
-        let outcome = match runs {
-            Runs::OneByOne => {
-                eprintln!("study {}: variant {}/{}: {label}", study.name, i + 1, count);
-                let opts = RunOptions::quiet(run_dir, !study.processes);
-                runner::run(&scene, &opts).map(|r| r.summary)
-            }
-            Runs::Reuse => {
-                read_summary(&run_dir.join("summary.json")).map_err(|e| runner::RunError {
-                    message: format!("--replot: {e}"),
-                })
-            }
-            Runs::Parallel { .. } => {
-                // A run that failed still writes its summary (status `failed`, the error).
-                read_summary(&run_dir.join("summary.json"))
-                    .map_err(|e| runner::RunError {
-                        message: format!("{e}; its log ends: {}", last_log_line(&run_dir)),
-                    })
-                    .and_then(|s| match s["status"].as_str() {
-                        Some("failed") => Err(runner::RunError {
-                            message: s["error"].as_str().unwrap_or("failed").to_string(),
-                        }),
-                        _ => Ok(s),
-                    })
-            }
-        };
-        let summary = match outcome {
-            Ok(r) => r,
+        let label = v.label.clone();
+        let resolution = v.resolution;
+        match variant_summary(study, (i, count), v, runs) {
+            Ok(summary) => rows.push(row(study, label, resolution, &summary)?),
             // A map over parameters meets variants the method cannot carry: keep the row
             // (with the reason on standard error) instead of losing the study.
             Err(e) if study.diagram.is_some() => {
@@ -522,47 +492,9 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, runs: Runs) -> Result<S
                     resolution,
                     curve_x: None,
                 });
-                continue;
             }
             Err(e) => return Err(format!("variant {label}: {e}")),
-        };
-        let s = &summary;
-        let m = &s["metrics"][&study.metric];
-        // A run that completed without the study's metric (too short for a period, ...):
-        // keep the row, say why.
-        let status = match s["metric_errors"][&study.metric].as_str() {
-            Some(why) => {
-                eprintln!("study {}: variant {label}: {why}", study.name);
-                "no metric".to_string()
-            }
-            None => s["status"].as_str().unwrap_or("").to_string(),
-        };
-        let point = study
-            .diagram
-            .as_ref()
-            .and_then(|d| Some((s["derived"][&d.x].as_f64()?, s["derived"][&d.y].as_f64()?)));
-        let curve_x = match &study.curve {
-            Some(c) => Some(s["derived"][&c.x].as_f64().ok_or_else(|| {
-                format!(
-                    "variant {label}: curve.x `{}` is not among the summary's derived values",
-                    c.x
-                )
-            })?),
-            None => None,
-        };
-        rows.push(Row {
-            label,
-            value: m["value"].as_f64().unwrap_or(f64::NAN),
-            reference: m["reference"].as_f64(),
-            relative_error: m["relative_error"].as_f64(),
-            wall_seconds: s["wall_seconds"].as_f64().unwrap_or(0.0),
-            steps: s["steps"].as_u64().unwrap_or(0),
-            status,
-            class: m["label"].as_str().map(str::to_string),
-            point,
-            resolution,
-            curve_x,
-        });
+        }
     }
     let mut note = String::new();
     if let Some(c) = &study.convergence {
@@ -577,11 +509,103 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, runs: Runs) -> Result<S
             c.order, c.key
         );
     }
+    write_outputs(study, &rows, &note, out)
+}
+
+/// The summary of variant `i` of `count`: run now, or read from its run directory (where
+/// the parallel runs or an earlier study left it).
+fn variant_summary(
+    study: &Study,
+    (i, count): (usize, usize),
+    v: Variant,
+    runs: Runs,
+) -> Result<serde_json::Value, runner::RunError> {
+    let Variant {
+        label,
+        scene,
+        run_dir,
+        ..
+    } = v;
+    match runs {
+        Runs::OneByOne => {
+            eprintln!("study {}: variant {}/{}: {label}", study.name, i + 1, count);
+            let opts = RunOptions::quiet(run_dir, !study.processes);
+            runner::run(&scene, &opts).map(|r| r.summary)
+        }
+        Runs::Reuse => read_summary(&run_dir.join("summary.json")).map_err(|e| runner::RunError {
+            message: format!("--replot: {e}"),
+        }),
+        Runs::Parallel { .. } => {
+            // A run that failed still writes its summary (status `failed`, the error).
+            read_summary(&run_dir.join("summary.json"))
+                .map_err(|e| runner::RunError {
+                    message: format!("{e}; its log ends: {}", last_log_line(&run_dir)),
+                })
+                .and_then(|s| match s["status"].as_str() {
+                    Some("failed") => Err(runner::RunError {
+                        message: s["error"].as_str().unwrap_or("failed").to_string(),
+                    }),
+                    _ => Ok(s),
+                })
+        }
+    }
+}
+
+/// The table row of a variant from its summary `s`: the metric's value, reference and error,
+/// and the diagram's and curve's coordinates from the derived values.
+fn row(
+    study: &Study,
+    label: String,
+    resolution: Option<f64>,
+    s: &serde_json::Value,
+) -> Result<Row, String> {
+    let m = &s["metrics"][&study.metric];
+    // A run that completed without the study's metric (too short for a period, ...): keep
+    // the row, say why.
+    let status = match s["metric_errors"][&study.metric].as_str() {
+        Some(why) => {
+            eprintln!("study {}: variant {label}: {why}", study.name);
+            "no metric".to_string()
+        }
+        None => s["status"].as_str().unwrap_or("").to_string(),
+    };
+    let point = study
+        .diagram
+        .as_ref()
+        .and_then(|d| Some((s["derived"][&d.x].as_f64()?, s["derived"][&d.y].as_f64()?)));
+    let curve_x = match &study.curve {
+        Some(c) => Some(s["derived"][&c.x].as_f64().ok_or_else(|| {
+            format!(
+                "variant {label}: curve.x `{}` is not among the summary's derived values",
+                c.x
+            )
+        })?),
+        None => None,
+    };
+    Ok(Row {
+        label,
+        value: m["value"].as_f64().unwrap_or(f64::NAN),
+        reference: m["reference"].as_f64(),
+        relative_error: m["relative_error"].as_f64(),
+        wall_seconds: s["wall_seconds"].as_f64().unwrap_or(0.0),
+        steps: s["steps"].as_u64().unwrap_or(0),
+        status,
+        class: m["label"].as_str().map(str::to_string),
+        point,
+        resolution,
+        curve_x,
+    })
+}
+
+/// The study's files in `out`: `<name>.csv` and `.md` (the table, then `note`), `.png`
+/// (error against wall time, where the metric has a reference), `_curve.png` and
+/// `_diagram.png` where the study asks for them. Returns the markdown.
+fn write_outputs(study: &Study, rows: &[Row], note: &str, out: &Path) -> Result<String, String> {
     let curve_name = study.curve.as_ref().map(|c| c.x.as_str());
-    let csv = render_csv(&rows, curve_name);
+    let csv = render_csv(rows, curve_name);
     std::fs::write(out.join(format!("{}.csv", study.name)), &csv).map_err(|e| e.to_string())?;
     let title = study.title.clone().unwrap_or_else(|| study.name.clone());
-    let md = render_markdown(&title, &study.metric, &rows, curve_name) + &note;
+    let md = render_markdown(&title, &study.metric, rows, curve_name) + note;
     std::fs::write(out.join(format!("{}.md", study.name)), &md).map_err(|e| e.to_string())?;
     let points: Vec<crate::plot::CostPoint> = rows
         .iter()
