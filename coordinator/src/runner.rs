@@ -566,17 +566,7 @@ fn drive(
     st: &mut RunState,
 ) -> Result<&'static str, RunError> {
     st.configured = describe_and_configure(scene, plan, nodes)?;
-    // Which node runs each phase of the schedule.
-    let owner: Vec<usize> = plan
-        .schedule
-        .iter()
-        .map(|p| {
-            nodes
-                .iter()
-                .position(|n| n.description.kind == p.node())
-                .ok_or_else(|| fail(format!("no node of kind `{}` runs the phase {p}", p.node())))
-        })
-        .collect::<Result<_, _>>()?;
+    let owner = phase_owners(plan, nodes)?;
     st.effects = plan.effects(&st.configured.effects);
     let schedule_names: Vec<String> = plan.schedule.iter().map(|p| p.name().to_string()).collect();
     if opts.verbose {
@@ -733,15 +723,8 @@ fn drive(
                 .map_err(|e| fail(format!("reading bead states at step {}: {e}", step + 1)))?;
         }
         if log_due {
-            if has_beads {
-                log.bead_states(step + 1, st.time, &beads, &radii, &states)
-                    .map_err(fail)?;
-            }
-            log.diagnostics(step + 1, st.time, &st.last_diagnostics)
-                .map_err(fail)?;
-            log.timings(step + 1, st.time, &st.seconds_per_phase)
-                .map_err(fail)?;
-            log.flush().map_err(fail)?;
+            let logged_states = has_beads.then_some((&beads[..], &radii[..], &states[..]));
+            log_step(log, step + 1, logged_states, st)?;
         }
         if let (Some(snap), true) = (snapshots.as_mut(), snapshot_due) {
             snap.write((step + 1, st.time), nodes, (&beads, &radii), &states, log)?;
@@ -783,6 +766,39 @@ fn drive(
     };
     conclude(scene, opts, plan, &mut *exchange, end, st)?;
     Ok(status)
+}
+
+/// Which node runs each phase of the schedule (an index into `nodes`).
+fn phase_owners(plan: &Plan, nodes: &[Node]) -> Result<Vec<usize>, RunError> {
+    plan.schedule
+        .iter()
+        .map(|p| {
+            nodes
+                .iter()
+                .position(|n| n.description.kind == p.node())
+                .ok_or_else(|| fail(format!("no node of kind `{}` runs the phase {p}", p.node())))
+        })
+        .collect()
+}
+
+/// Log step `step`: the bead states where the run has beads (`(beads per fibre, radii,
+/// states)`), the diagnostics and the seconds per phase so far; then flush, so that a run
+/// cut short keeps what it logged.
+fn log_step(
+    log: &mut RunLog,
+    step: u64,
+    beads: Option<(&[usize], &[f64], &[BeadState])>,
+    st: &RunState,
+) -> Result<(), RunError> {
+    if let Some((beads, radii, states)) = beads {
+        log.bead_states(step, st.time, beads, radii, states)
+            .map_err(fail)?;
+    }
+    log.diagnostics(step, st.time, &st.last_diagnostics)
+        .map_err(fail)?;
+    log.timings(step, st.time, &st.seconds_per_phase)
+        .map_err(fail)?;
+    log.flush().map_err(fail)
 }
 
 /// Print what the run is about to do: scene, effects, schedule, layout, snapshots, the
