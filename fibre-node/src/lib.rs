@@ -14,7 +14,8 @@
 //! - [`stability`]: the beam-stiffness time-step limit and the mass-weighted stiffness matrix;
 //! - [`spm_exchange`], [`spm_exchange_stiffness`]: light beads and stiff fibres under the
 //!   explicit SPM exchange;
-//! - [`config`]: the `[[fibre]]` part of a scene;
+//! - [`config`]: the fibre node's part of a scene; `fibre_table`: one `[[fibre]]` table
+//!   validated key by key;
 //! - `fibre_setup`: one fibre made ready to run: built, checked against the time step
 //!   (refused with the limit and the cures named), its derived values and notes;
 //! - [`component`]: [`FibreComponent`], the [`cosim::Component`] the executable serves;
@@ -29,6 +30,7 @@ pub mod fibre;
 pub mod fibre_contact;
 pub mod fibre_overlap;
 mod fibre_setup;
+mod fibre_table;
 #[cfg(test)]
 mod gradient_check;
 pub mod near_pairs;
