@@ -167,59 +167,15 @@ fn fmt_list<T: std::fmt::Display>(v: &[T]) -> String {
     format!("[{}]", items.join(", "))
 }
 
-/// Read the fluid node's part of a scene.
+/// Read the fluid node's part of a scene. The keys are checked in the order below, so a
+/// scene with several faults is refused for the first of them.
 pub fn parse_scene(scene_toml: &str) -> Result<FluidConfig, String> {
     let table = scene_keys::parse_table(scene_toml)?;
     let dimensions = scene_keys::dimensions(&table)? as usize;
     let dt = scene_keys::time_step(&table)?;
 
-    let fluid =
-        match table.get("fluid") {
-            None => return Err(
-                "fluid: the scene has no [fluid] table, so the fluid node has nothing to simulate"
-                    .into(),
-            ),
-            Some(v @ toml::Value::Table(_)) => v.clone(),
-            Some(v) => return Err(format!("fluid: expected a table, got {}", describe_toml(v))),
-        };
-    known_keys("fluid", &fluid, &FLUID_KEYS)?;
-    let raw: RawFluid = deserialize("fluid", fluid)?;
-    if raw.method != "spm" {
-        return Err(format!(
-            "fluid.method: expected \"spm\" (the Smoothed Profile Method; FPD on \
-             lattice Boltzmann is not available yet), got {:?}",
-            raw.method
-        ));
-    }
-    if raw.grid.len() != dimensions {
-        let want = if dimensions == 2 {
-            "[nx, ny]"
-        } else {
-            "[nx, ny, nz]"
-        };
-        return Err(format!(
-            "fluid.grid: a {dimensions}D scene expects {want}, got {}",
-            fmt_list(&raw.grid)
-        ));
-    }
-    let mut grid = [1usize; 3];
-    let mut cells: u64 = 1;
-    for (a, &n) in raw.grid.iter().enumerate() {
-        if n < MIN_GRID {
-            return Err(format!(
-                "fluid.grid: expected sizes of at least {MIN_GRID} along every axis, got {}",
-                fmt_list(&raw.grid)
-            ));
-        }
-        cells = cells.saturating_mul(n as u64);
-        if cells > MAX_CELLS {
-            return Err(format!(
-                "fluid.grid: expected at most {MAX_CELLS} cells in all, got {}",
-                fmt_list(&raw.grid)
-            ));
-        }
-        grid[a] = n as usize;
-    }
+    let raw = raw_fluid(&table)?;
+    let grid = grid_sizes(&raw.grid, dimensions)?;
     let viscosity = positive("fluid.viscosity", raw.viscosity)?;
     let density = match raw.density {
         Some(x) => positive("fluid.density", x)?,
@@ -233,87 +189,11 @@ pub fn parse_scene(scene_toml: &str) -> Result<FluidConfig, String> {
         Some(x) => positive("fluid.xi_cutoff", x)?,
         None => DEFAULT_CUTOFF_OVER_XI * xi,
     };
-    let mut body_force = [0.0; 3];
-    if let Some(f) = &raw.body_force {
-        if f.len() != dimensions || f.iter().any(|x| !x.is_finite()) {
-            let want = if dimensions == 2 {
-                "[fx, fy]"
-            } else {
-                "[fx, fy, fz]"
-            };
-            return Err(format!(
-                "fluid.body_force: expected {want} (finite numbers), got {}",
-                fmt_list(f)
-            ));
-        }
-        body_force[..dimensions].copy_from_slice(f);
-    }
-
-    let walls = match table.get("walls") {
-        None => None,
-        Some(v @ toml::Value::Table(_)) => {
-            known_keys("walls", v, &WALLS_KEYS)?;
-            let raw: RawWalls = deserialize("walls", v.clone())?;
-            if raw.velocity.len() != 2 || raw.velocity.iter().any(|x| !x.is_finite()) {
-                return Err(format!(
-                    "walls.velocity: expected [bottom, top] (two finite numbers), got {}",
-                    fmt_list(&raw.velocity)
-                ));
-            }
-            let thickness = match raw.thickness {
-                Some(t) => positive("walls.thickness", t)?,
-                None => DEFAULT_WALL_THICKNESS,
-            };
-            let gap = grid[1] as f64 - 2.0 * thickness;
-            let need = 2.0 * xi_cutoff + 2.0;
-            if gap < need {
-                return Err(format!(
-                    "walls.thickness: {thickness} leaves a gap of {gap} grid units between the \
-                     walls' inner faces in a grid of ny = {}, expected at least {need} \
-                     (2 fluid.xi_cutoff + 2)",
-                    grid[1]
-                ));
-            }
-            Some(WallsConfig {
-                velocity: [raw.velocity[0], raw.velocity[1]],
-                thickness,
-            })
-        }
-        Some(v) => return Err(format!("walls: expected a table, got {}", describe_toml(v))),
-    };
-
-    let initial_velocity = match raw.initial_velocity.as_deref() {
-        None | Some("rest") => InitialVelocity::Rest,
-        Some("couette") if walls.is_some() => InitialVelocity::Couette,
-        Some("couette") => {
-            return Err(
-                "fluid.initial_velocity: \"couette\" needs a [walls] table (the linear \
-                 profile runs between the walls)"
-                    .into(),
-            )
-        }
-        Some(other) => {
-            return Err(format!(
-                "fluid.initial_velocity: expected \"rest\" or \"couette\", got {other:?}"
-            ))
-        }
-    };
-
+    let body_force = body_force(raw.body_force.as_deref(), dimensions)?;
+    let walls = walls(&table, grid, xi_cutoff)?;
+    let initial_velocity = initial_velocity(raw.initial_velocity.as_deref(), walls.is_some())?;
     let fibres = read_fibres(&table)?;
-    for (n, f) in fibres.iter().enumerate() {
-        // A bead's cut-off box must not wrap onto itself in the periodic grid.
-        let reach = f.bead_radius + xi_cutoff;
-        let need = ((2.0 * reach).floor() as usize).saturating_add(2);
-        let smallest = grid[..dimensions].iter().copied().min().unwrap_or(0);
-        if smallest < need {
-            return Err(format!(
-                "fibre.{n}.bead_radius: {} plus fluid.xi_cutoff {xi_cutoff} needs a grid \
-                 of at least {need} nodes along every axis, fluid.grid has {smallest}",
-                f.bead_radius
-            ));
-        }
-    }
-
+    check_cutoff_boxes(&fibres, &grid[..dimensions], xi_cutoff)?;
     let binary = match &raw.binary {
         None => None,
         Some(v) => {
@@ -340,6 +220,155 @@ pub fn parse_scene(scene_toml: &str) -> Result<FluidConfig, String> {
         walls,
         fibres,
     })
+}
+
+/// The `[fluid]` table as written, its keys known and its method the SPM.
+fn raw_fluid(table: &toml::Table) -> Result<RawFluid, String> {
+    let fluid =
+        match table.get("fluid") {
+            None => return Err(
+                "fluid: the scene has no [fluid] table, so the fluid node has nothing to simulate"
+                    .into(),
+            ),
+            Some(v @ toml::Value::Table(_)) => v.clone(),
+            Some(v) => return Err(format!("fluid: expected a table, got {}", describe_toml(v))),
+        };
+    known_keys("fluid", &fluid, &FLUID_KEYS)?;
+    let raw: RawFluid = deserialize("fluid", fluid)?;
+    if raw.method != "spm" {
+        return Err(format!(
+            "fluid.method: expected \"spm\" (the Smoothed Profile Method; FPD on \
+             lattice Boltzmann is not available yet), got {:?}",
+            raw.method
+        ));
+    }
+    Ok(raw)
+}
+
+/// `fluid.grid` as `[nx, ny, nz]` (`nz = 1` in 2D), each at least [`MIN_GRID`] and
+/// [`MAX_CELLS`] in all.
+fn grid_sizes(sizes: &[i64], dimensions: usize) -> Result<[usize; 3], String> {
+    if sizes.len() != dimensions {
+        let want = if dimensions == 2 {
+            "[nx, ny]"
+        } else {
+            "[nx, ny, nz]"
+        };
+        return Err(format!(
+            "fluid.grid: a {dimensions}D scene expects {want}, got {}",
+            fmt_list(sizes)
+        ));
+    }
+    let mut grid = [1usize; 3];
+    let mut cells: u64 = 1;
+    for (a, &n) in sizes.iter().enumerate() {
+        if n < MIN_GRID {
+            return Err(format!(
+                "fluid.grid: expected sizes of at least {MIN_GRID} along every axis, got {}",
+                fmt_list(sizes)
+            ));
+        }
+        cells = cells.saturating_mul(n as u64);
+        if cells > MAX_CELLS {
+            return Err(format!(
+                "fluid.grid: expected at most {MAX_CELLS} cells in all, got {}",
+                fmt_list(sizes)
+            ));
+        }
+        grid[a] = n as usize;
+    }
+    Ok(grid)
+}
+
+fn body_force(given: Option<&[f64]>, dimensions: usize) -> Result<[f64; 3], String> {
+    let mut body_force = [0.0; 3];
+    if let Some(f) = given {
+        if f.len() != dimensions || f.iter().any(|x| !x.is_finite()) {
+            let want = if dimensions == 2 {
+                "[fx, fy]"
+            } else {
+                "[fx, fy, fz]"
+            };
+            return Err(format!(
+                "fluid.body_force: expected {want} (finite numbers), got {}",
+                fmt_list(f)
+            ));
+        }
+        body_force[..dimensions].copy_from_slice(f);
+    }
+    Ok(body_force)
+}
+
+/// The `[walls]` table, if any: two finite speeds and a thickness that leaves a gap wide
+/// enough for a bead's cut-off box.
+fn walls(
+    table: &toml::Table,
+    grid: [usize; 3],
+    xi_cutoff: f64,
+) -> Result<Option<WallsConfig>, String> {
+    let v = match table.get("walls") {
+        None => return Ok(None),
+        Some(v @ toml::Value::Table(_)) => v,
+        Some(v) => return Err(format!("walls: expected a table, got {}", describe_toml(v))),
+    };
+    known_keys("walls", v, &WALLS_KEYS)?;
+    let raw: RawWalls = deserialize("walls", v.clone())?;
+    if raw.velocity.len() != 2 || raw.velocity.iter().any(|x| !x.is_finite()) {
+        return Err(format!(
+            "walls.velocity: expected [bottom, top] (two finite numbers), got {}",
+            fmt_list(&raw.velocity)
+        ));
+    }
+    let thickness = match raw.thickness {
+        Some(t) => positive("walls.thickness", t)?,
+        None => DEFAULT_WALL_THICKNESS,
+    };
+    let gap = grid[1] as f64 - 2.0 * thickness;
+    let need = 2.0 * xi_cutoff + 2.0;
+    if gap < need {
+        return Err(format!(
+            "walls.thickness: {thickness} leaves a gap of {gap} grid units between the \
+             walls' inner faces in a grid of ny = {}, expected at least {need} \
+             (2 fluid.xi_cutoff + 2)",
+            grid[1]
+        ));
+    }
+    Ok(Some(WallsConfig {
+        velocity: [raw.velocity[0], raw.velocity[1]],
+        thickness,
+    }))
+}
+
+fn initial_velocity(given: Option<&str>, has_walls: bool) -> Result<InitialVelocity, String> {
+    match given {
+        None | Some("rest") => Ok(InitialVelocity::Rest),
+        Some("couette") if has_walls => Ok(InitialVelocity::Couette),
+        Some("couette") => Err(
+            "fluid.initial_velocity: \"couette\" needs a [walls] table (the \
+                                linear profile runs between the walls)"
+                .into(),
+        ),
+        Some(other) => Err(format!(
+            "fluid.initial_velocity: expected \"rest\" or \"couette\", got {other:?}"
+        )),
+    }
+}
+
+/// A bead's cut-off box must not wrap onto itself in the periodic grid.
+fn check_cutoff_boxes(fibres: &[FibreInfo], sizes: &[usize], xi_cutoff: f64) -> Result<(), String> {
+    for (n, f) in fibres.iter().enumerate() {
+        let reach = f.bead_radius + xi_cutoff;
+        let need = ((2.0 * reach).floor() as usize).saturating_add(2);
+        let smallest = sizes.iter().copied().min().unwrap_or(0);
+        if smallest < need {
+            return Err(format!(
+                "fibre.{n}.bead_radius: {} plus fluid.xi_cutoff {xi_cutoff} needs a grid \
+                 of at least {need} nodes along every axis, fluid.grid has {smallest}",
+                f.bead_radius
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// `beads`, `bead_radius` (and `spacing`, `youngs_modulus`, `bending_stiffness` if they are
