@@ -132,22 +132,11 @@ pub struct FpdScene {
     pub mach: f64,
 }
 
-/// Read and check the FPD part of a scene.
+/// Read and check the FPD part of a scene. The keys are checked in the order below, so a
+/// scene with several faults is refused for the first of them.
 pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
     let table = scene_keys::parse_table(scene_toml)?;
-    if scene_keys::dimensions(&table)? != 2 {
-        return Err(
-            "dimensions: fluid.method = \"fpd-lbm\" is the 2D D2Q9 lattice of S2023; set dimensions = 2"
-                .into(),
-        );
-    }
-    let dt = scene_keys::time_step(&table)?;
-    if dt != 1.0 {
-        return Err(format!(
-            "time.dt = {dt}: fluid.method = \"fpd-lbm\" runs in lattice units, one lattice step \
-             per step; set time.dt = 1 and express viscosity and velocities per lattice step"
-        ));
-    }
+    check_lattice_units(&table)?;
     let fluid = table.get("fluid").cloned().ok_or("fluid: missing")?;
     let raw: RawFluid = deserialize_at("fluid", fluid)?;
     debug_assert_eq!(raw.method, "fpd-lbm");
@@ -171,49 +160,12 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
             ))
         }
     };
-    let walls = match table.get("walls") {
-        None => None,
-        Some(w) => {
-            let w: RawWalls = deserialize_at("walls", w.clone()).map_err(|e| {
-                if e.contains("thickness") {
-                    format!(
-                        "{e}; under fluid.method = \"fpd-lbm\" the walls are bounce-back planes \
-                         at y = -1/2 and ny - 1/2 and have no thickness"
-                    )
-                } else {
-                    e
-                }
-            })?;
-            for (k, u) in w.velocity.iter().enumerate() {
-                let mach = u.abs() * 3f64.sqrt();
-                if mach.is_nan() || mach > MAX_WALL_MACH {
-                    return Err(format!(
-                        "walls.velocity.{k} = {u}: Mach number |u| sqrt 3 = {mach:.3} exceeds the \
-                         lattice's limit {MAX_WALL_MACH} (compressibility error ~ Ma^2); lower \
-                         the wall speed (and raise the viscosity to keep the Reynolds number)"
-                    ));
-                }
-            }
-            Some(w.velocity)
-        }
-    };
+    let walls = walls(&table)?;
     if couette_start && walls.is_none() {
         return Err("fluid.initial_velocity = \"couette\" needs walls.velocity".into());
     }
-
     let fibres = crate::config::read_fibres(&table)?;
-    if let Some((n, f)) = fibres
-        .iter()
-        .enumerate()
-        .find(|(_, f)| f.bead_radius != fibres[0].bead_radius)
-    {
-        return Err(format!(
-            "fibre.{n}.bead_radius = {}: under fluid.method = \"fpd-lbm\" all beads share one \
-             radius (fibre.0 has {})",
-            f.bead_radius, fibres[0].bead_radius
-        ));
-    }
-    let radius = fibres.first().map(|f| f.bead_radius);
+    let radius = shared_bead_radius(&fibres)?;
     let beads: Vec<usize> = fibres.iter().map(|f| f.beads).collect();
     let bending_stiffness = fibres.iter().map(|f| f.bending_stiffness).collect();
     let mut coupling = FpdConfig::new(radius.unwrap_or(1.0), viscosity / density);
@@ -226,36 +178,10 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
     if let Some(c) = raw.profile_cutoff {
         coupling.cutoff = c;
     }
-    let solid_layers = match raw.solid_layers {
-        None => None,
-        Some(l) => {
-            let thickness = scene_keys::positive("fluid.solid_layers.thickness", l.thickness)?;
-            let interface = scene_keys::positive("fluid.solid_layers.interface", l.interface)?;
-            if walls.is_none() {
-                return Err("fluid.solid_layers: the layers move with the walls; set \
-                            walls.velocity"
-                    .into());
-            }
-            if 2.0 * thickness >= ny as f64 {
-                return Err(format!(
-                    "fluid.solid_layers.thickness = {thickness}: two layers must leave fluid \
-                     between them (gap ny = {ny})"
-                ));
-            }
-            if beads.iter().any(|&n| n > 0) {
-                return Err(
-                    "fluid.solid_layers: the sandwich of S2023 Fig. 2 is a scene \
-                            without fibres (the bead profiles would overwrite the layers' \
-                            viscosity); remove the [[fibre]] tables"
-                        .into(),
-                );
-            }
-            Some(SolidLayers {
-                thickness,
-                interface,
-            })
-        }
-    };
+    let solid_layers = raw
+        .solid_layers
+        .map(|l| solid_layers(l, walls.is_some(), ny, &beads))
+        .transpose()?;
     let stream = match raw.stream {
         None => None,
         Some(r) => {
@@ -274,17 +200,7 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
         .flatten()
         .chain(stream.as_ref().map(|s| &s.velocity))
         .fold(0.0f64, |m, u| m.max(u.abs()));
-    let cell_re = fastest * density / viscosity;
-    if cell_re > MAX_CELL_REYNOLDS {
-        return Err(format!(
-            "fluid (fpd-lbm): the cell Reynolds number max|u| dx / nu = {cell_re:.3} (max|u| = \
-             {fastest}, the fastest wall or stream; nu = fluid.viscosity / fluid.density = {}) \
-             exceeds {MAX_CELL_REYNOLDS}, beyond which this MRT lattice was measured to go \
-             unstable; raise fluid.viscosity, or refine the grid (more nodes per bead diameter \
-             at the same Reynolds number)",
-            viscosity / density
-        ));
-    }
+    let cell_re = cell_reynolds(fastest, viscosity, density)?;
     Ok(FpdScene {
         nx,
         ny,
@@ -300,6 +216,118 @@ pub fn parse_fpd_scene(scene_toml: &str) -> Result<FpdScene, String> {
         cell_reynolds: cell_re,
         mach: fastest * 3f64.sqrt(),
     })
+}
+
+/// The D2Q9 lattice is 2D and takes one lattice step per step.
+fn check_lattice_units(table: &toml::Table) -> Result<(), String> {
+    if scene_keys::dimensions(table)? != 2 {
+        return Err(
+            "dimensions: fluid.method = \"fpd-lbm\" is the 2D D2Q9 lattice of S2023; set dimensions = 2"
+                .into(),
+        );
+    }
+    let dt = scene_keys::time_step(table)?;
+    if dt != 1.0 {
+        return Err(format!(
+            "time.dt = {dt}: fluid.method = \"fpd-lbm\" runs in lattice units, one lattice step \
+             per step; set time.dt = 1 and express viscosity and velocities per lattice step"
+        ));
+    }
+    Ok(())
+}
+
+/// `walls.velocity`, if the scene has walls, each below [`MAX_WALL_MACH`].
+fn walls(table: &toml::Table) -> Result<Option<[f64; 2]>, String> {
+    let Some(w) = table.get("walls") else {
+        return Ok(None);
+    };
+    let w: RawWalls = deserialize_at("walls", w.clone()).map_err(|e| {
+        if e.contains("thickness") {
+            format!(
+                "{e}; under fluid.method = \"fpd-lbm\" the walls are bounce-back planes \
+                 at y = -1/2 and ny - 1/2 and have no thickness"
+            )
+        } else {
+            e
+        }
+    })?;
+    for (k, u) in w.velocity.iter().enumerate() {
+        let mach = u.abs() * 3f64.sqrt();
+        if mach.is_nan() || mach > MAX_WALL_MACH {
+            return Err(format!(
+                "walls.velocity.{k} = {u}: Mach number |u| sqrt 3 = {mach:.3} exceeds the \
+                 lattice's limit {MAX_WALL_MACH} (compressibility error ~ Ma^2); lower \
+                 the wall speed (and raise the viscosity to keep the Reynolds number)"
+            ));
+        }
+    }
+    Ok(Some(w.velocity))
+}
+
+/// The one bead radius of all fibres (`None` without fibres).
+fn shared_bead_radius(fibres: &[crate::config::FibreInfo]) -> Result<Option<f64>, String> {
+    if let Some((n, f)) = fibres
+        .iter()
+        .enumerate()
+        .find(|(_, f)| f.bead_radius != fibres[0].bead_radius)
+    {
+        return Err(format!(
+            "fibre.{n}.bead_radius = {}: under fluid.method = \"fpd-lbm\" all beads share one \
+             radius (fibre.0 has {})",
+            f.bead_radius, fibres[0].bead_radius
+        ));
+    }
+    Ok(fibres.first().map(|f| f.bead_radius))
+}
+
+/// `[fluid.solid_layers]`: between walls, leaving fluid between the layers, without fibres.
+fn solid_layers(
+    l: RawLayers,
+    has_walls: bool,
+    ny: usize,
+    beads: &[usize],
+) -> Result<SolidLayers, String> {
+    let thickness = scene_keys::positive("fluid.solid_layers.thickness", l.thickness)?;
+    let interface = scene_keys::positive("fluid.solid_layers.interface", l.interface)?;
+    if !has_walls {
+        return Err(
+            "fluid.solid_layers: the layers move with the walls; set walls.velocity".into(),
+        );
+    }
+    if 2.0 * thickness >= ny as f64 {
+        return Err(format!(
+            "fluid.solid_layers.thickness = {thickness}: two layers must leave fluid \
+             between them (gap ny = {ny})"
+        ));
+    }
+    if beads.iter().any(|&n| n > 0) {
+        return Err(
+            "fluid.solid_layers: the sandwich of S2023 Fig. 2 is a scene without \
+                    fibres (the bead profiles would overwrite the layers' viscosity); remove \
+                    the [[fibre]] tables"
+                .into(),
+        );
+    }
+    Ok(SolidLayers {
+        thickness,
+        interface,
+    })
+}
+
+/// `max|u| dx / nu` for the fastest wall or stream, refused above [`MAX_CELL_REYNOLDS`].
+fn cell_reynolds(fastest: f64, viscosity: f64, density: f64) -> Result<f64, String> {
+    let cell_re = fastest * density / viscosity;
+    if cell_re > MAX_CELL_REYNOLDS {
+        return Err(format!(
+            "fluid (fpd-lbm): the cell Reynolds number max|u| dx / nu = {cell_re:.3} (max|u| = \
+             {fastest}, the fastest wall or stream; nu = fluid.viscosity / fluid.density = {}) \
+             exceeds {MAX_CELL_REYNOLDS}, beyond which this MRT lattice was measured to go \
+             unstable; raise fluid.viscosity, or refine the grid (more nodes per bead diameter \
+             at the same Reynolds number)",
+            viscosity / density
+        ));
+    }
+    Ok(cell_re)
 }
 
 /// A configured FPD fluid: lattice, coupling and exchange buffers.
