@@ -146,7 +146,8 @@ impl Table<'_> {
 }
 
 /// Read `[fluid.binary]` (already known to be present) for a scene of `dims` dimensions on
-/// `grid`, with the largest wall speed `wall_speed` (0 without walls) and `time.dt`.
+/// `grid`, with the largest wall speed `wall_speed` (0 without walls) and `time.dt`. The keys
+/// are checked in the order below, so a table with several faults is refused for the first.
 pub fn parse(
     value: &toml::Value,
     dims: usize,
@@ -170,42 +171,13 @@ pub fn parse(
     }
     let tb = Table { t };
     let xi = tb.positive("xi")?.unwrap_or(DEFAULT_XI);
-    let e0 = match (tb.positive("e0")?, tb.positive("sigma")?) {
-        (Some(_), Some(_)) => {
-            return Err(
-                "fluid.binary.sigma: give either e0 or sigma (sigma = (2 sqrt 2 / 3) e0 xi), \
-                 not both"
-                    .into(),
-            )
-        }
-        (Some(e), None) => e,
-        // Invert σ_AB = (2 √2 / 3) e0 ξ.
-        (None, Some(s)) => 3.0 * s / (2.0 * SQRT_2 * xi),
-        (None, None) => DEFAULT_E0,
-    };
+    let e0 = tb.energy_density(xi)?;
     let velocity_scale = match tb.positive("velocity_scale")? {
         Some(u) => Some(u),
         None if wall_speed > 0.0 => Some(wall_speed),
         None => None,
     };
-    let mobility = match (tb.positive("mobility")?, tb.positive("peclet")?) {
-        (Some(_), Some(_)) => {
-            return Err(
-                "fluid.binary.peclet: give either mobility or peclet (Pe = U0 L0 / (e0 M), \
-                 L2020 eq. 41), not both"
-                    .into(),
-            )
-        }
-        (Some(m), None) => m,
-        (None, Some(pe)) => {
-            let u0 = velocity_scale.ok_or(
-                "fluid.binary.peclet: needs the velocity scale U0 of L2020 eq. 41: set \
-                 fluid.binary.velocity_scale (or moving walls)",
-            )?;
-            cahn_hilliard::mobility_from_peclet(pe, u0, 1.0, e0).map_err(|e| e.to_string())?
-        }
-        (None, None) => DEFAULT_MOBILITY,
-    };
+    let mobility = tb.mobility(velocity_scale, e0)?;
     let stabilisation = match tb.number("stabilisation")? {
         Some(s) if s >= 0.0 => s,
         Some(s) => {
@@ -224,97 +196,7 @@ pub fn parse(
         }
         None => 0.0,
     };
-    let inside = match t.get("inside") {
-        None => Fluid::A,
-        Some(toml::Value::String(s)) if s == "A" => Fluid::A,
-        Some(toml::Value::String(s)) if s == "B" => Fluid::B,
-        Some(v) => {
-            return Err(format!(
-                "fluid.binary.inside: expected \"A\" (psi = +1) or \"B\" (psi = -1), got {}",
-                describe_toml(v)
-            ))
-        }
-    };
-    let kind =
-        match t.get("initial") {
-            None => return Err(
-                "fluid.binary.initial: required key is missing (expected \"flat\", \"droplet\" or \
-             \"half-droplet\")"
-                    .into(),
-            ),
-            Some(toml::Value::String(s)) => s.clone(),
-            Some(v) => {
-                return Err(format!(
-                "fluid.binary.initial: expected \"flat\", \"droplet\" or \"half-droplet\", got {}",
-                describe_toml(v)
-            ))
-            }
-        };
-    // Keys that belong to other initial states are refused rather than ignored.
-    let allowed: &[&str] = match kind.as_str() {
-        "flat" => &["normal", "position", "width"],
-        "droplet" => &["centre", "radius", "inside"],
-        "half-droplet" => &["centre", "radius", "inside", "normal"],
-        other => {
-            return Err(format!(
-                "fluid.binary.initial: expected \"flat\", \"droplet\" or \"half-droplet\", got \
-                 {other:?}"
-            ))
-        }
-    };
-    for k in ["normal", "position", "width", "centre", "radius", "inside"] {
-        if t.contains_key(k) && !allowed.contains(&k) {
-            return Err(format!(
-                "fluid.binary.{k}: does not apply to initial = \"{kind}\" (its keys: {})",
-                allowed.join(", ")
-            ));
-        }
-    }
-    let initial = match kind.as_str() {
-        "flat" => {
-            let (axis, positive) = flat_normal(t.get("normal"), dims)?;
-            let len = grid[axis] as f64;
-            let position = tb.required("position", tb.number("position")?, &kind)?;
-            let width = match tb.positive("width")? {
-                Some(w) if w < len => w,
-                Some(w) => {
-                    return Err(format!(
-                        "fluid.binary.width: expected less than the box length {len} along \
-                         the normal, got {w}"
-                    ))
-                }
-                None => 0.5 * len,
-            };
-            InitialPsi::Flat {
-                axis,
-                positive,
-                position,
-                width,
-            }
-        }
-        _ => {
-            let centre = tb.required("centre", tb.vector("centre", dims)?, &kind)?;
-            let radius = tb.required("radius", tb.positive("radius")?, &kind)?;
-            if kind == "droplet" {
-                InitialPsi::Droplet {
-                    centre,
-                    radius,
-                    inside,
-                }
-            } else {
-                let normal = tb.required("normal", tb.vector("normal", dims)?, &kind)?;
-                if normal.iter().all(|&v| v == 0.0) {
-                    return Err("fluid.binary.normal: expected a non-zero vector".into());
-                }
-                InitialPsi::HalfDroplet {
-                    centre,
-                    normal,
-                    radius,
-                    inside,
-                }
-            }
-        }
-    };
+    let initial = tb.initial(dims, grid)?;
     Ok(BinaryConfig {
         ch: CahnHilliardConfig {
             xi,
@@ -328,6 +210,142 @@ pub fn parse(
         wall_affinity,
         initial,
     })
+}
+
+impl Table<'_> {
+    /// e0, given or from `sigma` (one of the two).
+    fn energy_density(&self, xi: f64) -> Result<f64, String> {
+        match (self.positive("e0")?, self.positive("sigma")?) {
+            (Some(_), Some(_)) => Err(
+                "fluid.binary.sigma: give either e0 or sigma (sigma = (2 sqrt 2 / 3) e0 xi), \
+                 not both"
+                    .into(),
+            ),
+            (Some(e), None) => Ok(e),
+            // Invert σ_AB = (2 √2 / 3) e0 ξ.
+            (None, Some(s)) => Ok(3.0 * s / (2.0 * SQRT_2 * xi)),
+            (None, None) => Ok(DEFAULT_E0),
+        }
+    }
+
+    /// M, given or from `peclet` (one of the two; the Péclet number needs U0).
+    fn mobility(&self, velocity_scale: Option<f64>, e0: f64) -> Result<f64, String> {
+        match (self.positive("mobility")?, self.positive("peclet")?) {
+            (Some(_), Some(_)) => Err(
+                "fluid.binary.peclet: give either mobility or peclet (Pe = U0 L0 / (e0 M), \
+                 L2020 eq. 41), not both"
+                    .into(),
+            ),
+            (Some(m), None) => Ok(m),
+            (None, Some(pe)) => {
+                let u0 = velocity_scale.ok_or(
+                    "fluid.binary.peclet: needs the velocity scale U0 of L2020 eq. 41: set \
+                     fluid.binary.velocity_scale (or moving walls)",
+                )?;
+                cahn_hilliard::mobility_from_peclet(pe, u0, 1.0, e0).map_err(|e| e.to_string())
+            }
+            (None, None) => Ok(DEFAULT_MOBILITY),
+        }
+    }
+
+    /// `initial` and the keys of its kind; keys that belong to other kinds are refused
+    /// rather than ignored.
+    fn initial(&self, dims: usize, grid: [usize; 3]) -> Result<InitialPsi, String> {
+        let t = self.t;
+        let inside = match t.get("inside") {
+            None => Fluid::A,
+            Some(toml::Value::String(s)) if s == "A" => Fluid::A,
+            Some(toml::Value::String(s)) if s == "B" => Fluid::B,
+            Some(v) => {
+                return Err(format!(
+                    "fluid.binary.inside: expected \"A\" (psi = +1) or \"B\" (psi = -1), got {}",
+                    describe_toml(v)
+                ))
+            }
+        };
+        let kind = match t.get("initial") {
+            None => {
+                return Err(
+                    "fluid.binary.initial: required key is missing (expected \"flat\", \
+                            \"droplet\" or \"half-droplet\")"
+                        .into(),
+                )
+            }
+            Some(toml::Value::String(s)) => s.clone(),
+            Some(v) => {
+                return Err(format!(
+                    "fluid.binary.initial: expected \"flat\", \"droplet\" or \"half-droplet\", \
+                     got {}",
+                    describe_toml(v)
+                ))
+            }
+        };
+        let allowed: &[&str] = match kind.as_str() {
+            "flat" => &["normal", "position", "width"],
+            "droplet" => &["centre", "radius", "inside"],
+            "half-droplet" => &["centre", "radius", "inside", "normal"],
+            other => {
+                return Err(format!(
+                    "fluid.binary.initial: expected \"flat\", \"droplet\" or \"half-droplet\", got \
+                     {other:?}"
+                ))
+            }
+        };
+        for k in ["normal", "position", "width", "centre", "radius", "inside"] {
+            if t.contains_key(k) && !allowed.contains(&k) {
+                return Err(format!(
+                    "fluid.binary.{k}: does not apply to initial = \"{kind}\" (its keys: {})",
+                    allowed.join(", ")
+                ));
+            }
+        }
+        if kind == "flat" {
+            return self.flat(dims, grid);
+        }
+        let centre = self.required("centre", self.vector("centre", dims)?, &kind)?;
+        let radius = self.required("radius", self.positive("radius")?, &kind)?;
+        if kind == "droplet" {
+            return Ok(InitialPsi::Droplet {
+                centre,
+                radius,
+                inside,
+            });
+        }
+        let normal = self.required("normal", self.vector("normal", dims)?, &kind)?;
+        if normal.iter().all(|&v| v == 0.0) {
+            return Err("fluid.binary.normal: expected a non-zero vector".into());
+        }
+        Ok(InitialPsi::HalfDroplet {
+            centre,
+            normal,
+            radius,
+            inside,
+        })
+    }
+
+    /// `initial = "flat"`: the normal, the position and the slab's width (default half the
+    /// box along the normal).
+    fn flat(&self, dims: usize, grid: [usize; 3]) -> Result<InitialPsi, String> {
+        let (axis, positive) = flat_normal(self.t.get("normal"), dims)?;
+        let len = grid[axis] as f64;
+        let position = self.required("position", self.number("position")?, "flat")?;
+        let width = match self.positive("width")? {
+            Some(w) if w < len => w,
+            Some(w) => {
+                return Err(format!(
+                    "fluid.binary.width: expected less than the box length {len} along \
+                     the normal, got {w}"
+                ))
+            }
+            None => 0.5 * len,
+        };
+        Ok(InitialPsi::Flat {
+            axis,
+            positive,
+            position,
+            width,
+        })
+    }
 }
 
 /// `normal` of a flat interface: an axis index (fluid A on the + side) or a vector along
