@@ -330,10 +330,143 @@ fn cell_reynolds(fastest: f64, viscosity: f64, density: f64) -> Result<f64, Stri
     Ok(cell_re)
 }
 
-/// A configured FPD fluid: lattice, coupling and exchange buffers.
+fn lattice_error(e: impl std::fmt::Display) -> ComponentError {
+    ComponentError(format!("fluid (fpd-lbm): {e}"))
+}
+
+/// The lattice of `scene` at step 0: the walls, the solid layers' viscosity, and the
+/// Couette profile or the uniform stream where the scene starts from one.
+fn lattice_at_start(scene: &FpdScene) -> Result<MrtD2q9, String> {
+    let y_boundary = match scene.walls {
+        Some([bottom, top]) => YBoundary::Walls { bottom, top },
+        None => YBoundary::Periodic,
+    };
+    let nu = scene.viscosity / scene.density;
+    let mut mc = MrtConfig::new(scene.nx, scene.ny, y_boundary, nu);
+    mc.density = scene.density;
+    let mut lattice = MrtD2q9::new(mc).map_err(|e| e.to_string())?;
+    if let Some(layers) = scene.solid_layers {
+        let (nx, h) = (scene.nx, scene.ny as f64);
+        let phi: Vec<f64> = (0..scene.nx * scene.ny)
+            .map(|k| layers.phi((k / nx) as f64 + 0.5, h))
+            .collect();
+        lattice
+            .set_viscosity_from_fraction(&phi, nu, nu * scene.coupling.viscosity_ratio)
+            .map_err(|e| e.to_string())?;
+    }
+    if scene.couette_start {
+        let [b, t] = scene.walls.unwrap_or([0.0; 2]);
+        let ny = scene.ny as f64;
+        let layers = scene.solid_layers;
+        lattice
+            .initialize_with(|_, y| {
+                let z = y as f64 + 0.5;
+                let u = match layers {
+                    Some(l) => l.exact(z, ny, b, t),
+                    None => b + (t - b) * z / ny,
+                };
+                (scene.density, u, 0.0)
+            })
+            .map_err(|e| e.to_string())?;
+    }
+    if let Some(s) = &scene.stream {
+        lattice
+            .initialize_with(|_, _| (scene.density, s.velocity, 0.0))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(lattice)
+}
+
+/// The values an FPD scene derives, for the summary: the viscosities, the profile, the cell
+/// Reynolds and Mach numbers; with a stream its Reynolds number and blockage; between walls
+/// the gap, the shear rate and S2023's groups C, Re_ps and K (eq. 18) of fibre 0.
+fn fpd_derived_values(scene: &FpdScene, total_beads: usize) -> Vec<(String, f64)> {
+    let nu = scene.viscosity / scene.density;
+    let mut derived = vec![
+        // eta_f, shown because S2023's Re_ps may have set it (`fluid.particle_shear_reynolds`).
+        ("fluid.viscosity".to_string(), scene.viscosity),
+        ("fluid.kinematic_viscosity".into(), nu),
+        (
+            "fluid.viscosity_ratio".into(),
+            scene.coupling.viscosity_ratio,
+        ),
+        (
+            "fluid.interface_ratio".into(),
+            scene.coupling.interface_ratio,
+        ),
+        ("fluid.interface_thickness".into(), scene.coupling.xi()),
+        ("fluid.cell_reynolds".into(), scene.cell_reynolds),
+        ("fluid.mach".into(), scene.mach),
+    ];
+    if let Some(s) = &scene.stream {
+        let d = 2.0 * scene.coupling.radius;
+        derived.push(("fluid.stream.velocity".into(), s.velocity));
+        derived.push(("fluid.stream.sponge".into(), s.width as f64));
+        if total_beads > 0 {
+            // Re = U d / nu of a bead (the cylinder of S2023 Fig. 4), blockage d / H.
+            derived.push(("fluid.stream.reynolds".into(), s.velocity.abs() * d / nu));
+            derived.push(("fluid.stream.blockage".into(), d / scene.ny as f64));
+        }
+    }
+    let Some([b, t]) = scene.walls else {
+        return derived;
+    };
+    let h = scene.ny as f64;
+    let gamma = (t - b) / h;
+    derived.push(("fluid.gap".into(), h));
+    derived.push(("fluid.shear_rate".into(), gamma));
+    if let Some(l) = scene.solid_layers {
+        // S2023 section III A: r_xi = xi / H for the sandwich.
+        derived.push((
+            "fluid.solid_layers.interface_over_gap".into(),
+            l.interface / h,
+        ));
+    }
+    if let Some(&n) = scene.beads.first() {
+        // S2023 eq. 18: l_c = N d, C = l_c / H, Re_ps = rho gamma l_c^2 / (4 eta_f),
+        // K = 2 k_b / (eta_f gamma l_c^2).
+        let lc = n as f64 * 2.0 * scene.coupling.radius;
+        derived.push(("fluid.confinement".into(), lc / h));
+        derived.push((
+            "fluid.particle_shear_reynolds".into(),
+            scene.density * gamma.abs() * lc * lc / (4.0 * scene.viscosity),
+        ));
+        if let (Some(Some(kb)), true) = (scene.bending_stiffness.first(), gamma != 0.0) {
+            derived.push((
+                "fluid.bending_number".into(),
+                2.0 * kb / (scene.viscosity * gamma.abs() * lc * lc),
+            ));
+        }
+    }
+    derived
+}
+
+/// The check of the first bead states: bounce-back walls lie halfway outside the first and
+/// last rows.
+fn start_check(scene: &FpdScene, total_beads: usize) -> StartCheck {
+    StartCheck {
+        geometry: StartBox {
+            dims: 2,
+            size: [scene.nx as f64, scene.ny as f64, 1.0],
+            periodic: [true, scene.walls.is_none(), false],
+            walls: scene.walls.map(|_| {
+                let [bottom, top] = cosim::scene_keys::bounce_back_faces(scene.ny as f64);
+                WallFaces {
+                    bottom,
+                    top,
+                    wrap_y: false,
+                }
+            }),
+        },
+        beads_per_fibre: scene.beads.clone(),
+        radius: vec![scene.coupling.radius; total_beads],
+    }
+}
+
 /// Format tag of a saved fpd-lbm state ([`FpdRun::save`]).
 const FPD_STATE_FORMAT: &str = "fluid-node fpd-lbm state 1";
 
+/// A configured FPD fluid: lattice, coupling and exchange buffers.
 pub struct FpdRun {
     pub scene: FpdScene,
     pub lattice: MrtD2q9,
@@ -353,113 +486,23 @@ impl FpdRun {
     /// Plan the lattice and the coupling; what the node derives goes into `Configured`.
     pub fn configure(scene_toml: &str) -> Result<(Self, Configured), ComponentError> {
         let scene = parse_fpd_scene(scene_toml).map_err(ComponentError)?;
-        let y_boundary = match scene.walls {
-            Some([bottom, top]) => YBoundary::Walls { bottom, top },
-            None => YBoundary::Periodic,
-        };
-        let nu = scene.viscosity / scene.density;
-        let mut mc = MrtConfig::new(scene.nx, scene.ny, y_boundary, nu);
-        mc.density = scene.density;
-        let mut lattice =
-            MrtD2q9::new(mc).map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?;
-        if let Some(layers) = scene.solid_layers {
-            let (nx, h) = (scene.nx, scene.ny as f64);
-            let phi: Vec<f64> = (0..scene.nx * scene.ny)
-                .map(|k| layers.phi((k / nx) as f64 + 0.5, h))
-                .collect();
-            lattice
-                .set_viscosity_from_fraction(&phi, nu, nu * scene.coupling.viscosity_ratio)
-                .map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?;
-        }
-        if scene.couette_start {
-            let [b, t] = scene.walls.unwrap_or([0.0; 2]);
-            let ny = scene.ny as f64;
-            let layers = scene.solid_layers;
-            lattice
-                .initialize_with(|_, y| {
-                    let z = y as f64 + 0.5;
-                    let u = match layers {
-                        Some(l) => l.exact(z, ny, b, t),
-                        None => b + (t - b) * z / ny,
-                    };
-                    (scene.density, u, 0.0)
-                })
-                .map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?;
-        }
-        if let Some(s) = &scene.stream {
-            lattice
-                .initialize_with(|_, _| (scene.density, s.velocity, 0.0))
-                .map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?;
-        }
+        let mut lattice = lattice_at_start(&scene).map_err(lattice_error)?;
         let total_beads: usize = scene.beads.iter().sum();
         let coupling = if total_beads > 0 {
             Some(
                 FpdCoupling::new(scene.coupling, &mut lattice, total_beads)
-                    .map_err(|e| ComponentError(format!("fluid (fpd-lbm): {e}")))?,
+                    .map_err(lattice_error)?,
             )
         } else {
             None
         };
-
-        let mut derived = vec![
-            // eta_f, shown because S2023's Re_ps may have set it (`fluid.particle_shear_reynolds`).
-            ("fluid.viscosity".to_string(), scene.viscosity),
-            ("fluid.kinematic_viscosity".into(), nu),
-            (
-                "fluid.viscosity_ratio".into(),
-                scene.coupling.viscosity_ratio,
-            ),
-            (
-                "fluid.interface_ratio".into(),
-                scene.coupling.interface_ratio,
-            ),
-            ("fluid.interface_thickness".into(), scene.coupling.xi()),
-            ("fluid.cell_reynolds".into(), scene.cell_reynolds),
-            ("fluid.mach".into(), scene.mach),
-        ];
-        if let Some(s) = &scene.stream {
-            let d = 2.0 * scene.coupling.radius;
-            derived.push(("fluid.stream.velocity".into(), s.velocity));
-            derived.push(("fluid.stream.sponge".into(), s.width as f64));
-            if total_beads > 0 {
-                // Re = U d / nu of a bead (the cylinder of S2023 Fig. 4), blockage d / H.
-                derived.push(("fluid.stream.reynolds".into(), s.velocity.abs() * d / nu));
-                derived.push(("fluid.stream.blockage".into(), d / scene.ny as f64));
-            }
-        }
+        let derived = fpd_derived_values(&scene, total_beads);
         let mut active = Vec::new();
         if total_beads > 0 {
             active.push(cosim::effects::HYDRODYNAMICS.to_string());
         }
-        if let Some([b, t]) = scene.walls {
+        if scene.walls.is_some() {
             active.push(cosim::effects::WALLS.to_string());
-            let h = scene.ny as f64;
-            let gamma = (t - b) / h;
-            derived.push(("fluid.gap".into(), h));
-            derived.push(("fluid.shear_rate".into(), gamma));
-            if let Some(l) = scene.solid_layers {
-                // S2023 section III A: r_xi = xi / H for the sandwich.
-                derived.push((
-                    "fluid.solid_layers.interface_over_gap".into(),
-                    l.interface / h,
-                ));
-            }
-            if let Some(&n) = scene.beads.first() {
-                // S2023 eq. 18: l_c = N d, C = l_c / H, Re_ps = rho gamma l_c^2 / (4 eta_f),
-                // K = 2 k_b / (eta_f gamma l_c^2).
-                let lc = n as f64 * 2.0 * scene.coupling.radius;
-                derived.push(("fluid.confinement".into(), lc / h));
-                derived.push((
-                    "fluid.particle_shear_reynolds".into(),
-                    scene.density * gamma.abs() * lc * lc / (4.0 * scene.viscosity),
-                ));
-                if let (Some(Some(kb)), true) = (scene.bending_stiffness.first(), gamma != 0.0) {
-                    derived.push((
-                        "fluid.bending_number".into(),
-                        2.0 * kb / (scene.viscosity * gamma.abs() * lc * lc),
-                    ));
-                }
-            }
         }
         let mut notes = Vec::new();
         if total_beads > 0 && scene.mach > NOTE_MACH {
@@ -474,24 +517,7 @@ impl FpdRun {
                 scene.mach
             ));
         }
-        // Bounce-back walls lie halfway outside the first and last rows.
-        let start = Some(StartCheck {
-            geometry: StartBox {
-                dims: 2,
-                size: [scene.nx as f64, scene.ny as f64, 1.0],
-                periodic: [true, scene.walls.is_none(), false],
-                walls: scene.walls.map(|_| {
-                    let [bottom, top] = cosim::scene_keys::bounce_back_faces(scene.ny as f64);
-                    WallFaces {
-                        bottom,
-                        top,
-                        wrap_y: false,
-                    }
-                }),
-            },
-            beads_per_fibre: scene.beads.clone(),
-            radius: vec![scene.coupling.radius; total_beads],
-        });
+        let start = Some(start_check(&scene, total_beads));
         let run = FpdRun {
             start,
             lattice,
@@ -515,10 +541,6 @@ impl FpdRun {
         Ok((run, configured))
     }
 
-    /// The lattice's state, serialised: a JSON header line, then the populations as
-    /// little-endian f64. The viscosity and force fields are rebuilt from the beads at the
-    /// next step (the sparse viscosity update equals the full one bit for bit), the solid
-    /// layers and the stream's sponge from the scene.
     /// Write the lattice's velocity, density, viscosity and (with beads) solid fraction to
     /// `dir/name` ([`crate::field_output`]).
     pub fn write_fields(
@@ -543,6 +565,10 @@ impl FpdRun {
         crate::field_output::write(dir, name, [nx, ny, 1], &arrays)
     }
 
+    /// The lattice's state, serialised: a JSON header line, then the populations as
+    /// little-endian f64. The viscosity and force fields are rebuilt from the beads at the
+    /// next step (the sparse viscosity update equals the full one bit for bit), the solid
+    /// layers and the stream's sponge from the scene.
     pub fn save(&self) -> Result<Vec<u8>, ComponentError> {
         let (f, time) = self.lattice.saved_state();
         let header = serde_json::json!({
