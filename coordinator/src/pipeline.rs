@@ -174,22 +174,6 @@ impl Batches {
         timeout: Duration,
     ) -> Result<Vec<Vec<PhaseReport>>, (RunError, u64)> {
         let count = count.max(1);
-        let at_first = |e| (e, step);
-        // A node that fails without saying where failed somewhere in the batch.
-        let failed = |name: &str, e| {
-            if count == 1 {
-                (node_failed(name, step, "", e), step)
-            } else {
-                let last = step + count - 1;
-                let e = node_failed(
-                    name,
-                    step,
-                    &format!("or later, up to {last} (one batch), "),
-                    e,
-                );
-                (e, step)
-            }
-        };
         let timeout = timeout.saturating_mul(u32::try_from(count).unwrap_or(u32::MAX));
         let sent_early = self.sent_early.take() == Some(step);
         for (o, _) in &self.per_node {
@@ -198,7 +182,7 @@ impl Batches {
             }
             let link = &mut nodes[*o].link;
             link.send(&self.batch(*o, (step, count), full))
-                .map_err(|e| failed(link.name(), e))?;
+                .map_err(|e| batch_failed(link.name(), (step, count), e))?;
         }
         // A node that cannot take the next step's batch may have failed in this step already
         // (it got this step's batch a moment ago): its reply or its silence below says so,
@@ -214,11 +198,49 @@ impl Batches {
             }
             self.sent_early = Some(step + 1);
         }
-        // The node of the schedule's last phase usually answers last: block on it and look
-        // at the others without blocking. Once it has answered, block on one still silent:
-        // its reply may come later (it publishes its data before it answers, and the last
-        // node may finish in between), and looking without blocking would spin, taking the
-        // core the silent node needs.
+        let mut replies = self.collect_replies((step, count), nodes, timeout)?;
+        let mut next = vec![0usize; nodes.len()];
+        let mut all = Vec::with_capacity(count as usize);
+        for s in step..step + count {
+            let mut reports = Vec::with_capacity(self.schedule.len());
+            for (&phase, &o) in self.schedule.iter().zip(&self.owner) {
+                let r = replies[o]
+                    .as_mut()
+                    .and_then(|list| list.get_mut(next[o]))
+                    .map(std::mem::take)
+                    .ok_or_else(|| {
+                        let e = fail(format!(
+                            "node `{}` answered step {s} without a report for phase {phase}",
+                            nodes[o].link.name()
+                        ));
+                        (e, step)
+                    })?;
+                next[o] += 1;
+                *seconds.entry(phase.name().to_string()).or_default() += r.seconds;
+                *waiting.entry(phase.name().to_string()).or_default() += r.waited;
+                reports.push(r.report);
+            }
+            all.push(reports);
+        }
+        match next_refused {
+            Some(e) => Err((e, step + 1)),
+            None => Ok(all),
+        }
+    }
+
+    /// Every node's reply to the batch of `count` steps from `step`, indexed by node.
+    ///
+    /// The node of the schedule's last phase usually answers last: block on it and look at
+    /// the others without blocking. Once it has answered, block on one still silent: its
+    /// reply may come later (it publishes its data before it answers, and the last node may
+    /// finish in between), and looking without blocking would spin, taking the core the
+    /// silent node needs.
+    fn collect_replies(
+        &self,
+        (step, count): (u64, u64),
+        nodes: &mut [Node],
+        timeout: Duration,
+    ) -> Result<Vec<Option<Vec<cosim::TimedReport>>>, (RunError, u64)> {
         let last = *self.owner.last().expect("a schedule has phases");
         let mut replies: Vec<Option<Vec<cosim::TimedReport>>> = vec![None; nodes.len()];
         let started = Instant::now();
@@ -244,7 +266,7 @@ impl Batches {
                 let link = &mut nodes[*o].link;
                 let reply = link
                     .receive_within(limit)
-                    .map_err(|e| failed(link.name(), e))?;
+                    .map_err(|e| batch_failed(link.name(), (step, count), e))?;
                 match reply {
                     Some(Reply::PhasesDone(r)) => replies[*o] = Some(r),
                     Some(Reply::PhasesFailed { step: at, message }) => {
@@ -254,69 +276,71 @@ impl Batches {
                     }
                     Some(other) => {
                         let e = LinkFailure::Setup(format!("unexpected reply {other:?}"));
-                        return Err(failed(link.name(), e));
+                        return Err(batch_failed(link.name(), (step, count), e));
                     }
                     None => {}
                 }
             }
             if self.per_node.iter().all(|(o, _)| replies[*o].is_some()) {
-                break;
+                return Ok(replies);
             }
             if started.elapsed() > timeout {
-                // Which phases the silent nodes had; not which of them they were in.
-                let silent: Vec<String> = self
-                    .per_node
-                    .iter()
-                    .filter(|(o, _)| replies[*o].is_none())
-                    .map(|(o, list)| {
-                        let phases: Vec<&str> = list.iter().map(|(p, _, _)| p.name()).collect();
-                        let name = nodes[*o].link.name();
-                        format!("`{name}` (phases {})", phases.join(", "))
-                    })
-                    .collect();
-                let steps = if count == 1 {
-                    format!("step {step}")
-                } else {
-                    format!("steps {step} to {}", step + count - 1)
-                };
-                let other = if self.per_node.len() > 1 {
-                    " (one may be waiting for the other)"
-                } else {
-                    ""
-                };
-                return Err(at_first(fail(format!(
-                    "{steps}: node {} did not answer within {} s{other}",
-                    silent.join(" and "),
-                    timeout.as_secs_f64()
-                ))));
+                return Err((self.silence(&replies, (step, count), nodes, timeout), step));
             }
         }
-        let mut next = vec![0usize; nodes.len()];
-        let mut all = Vec::with_capacity(count as usize);
-        for s in step..step + count {
-            let mut reports = Vec::with_capacity(self.schedule.len());
-            for (&phase, &o) in self.schedule.iter().zip(&self.owner) {
-                let r = replies[o]
-                    .as_mut()
-                    .and_then(|list| list.get_mut(next[o]))
-                    .map(std::mem::take)
-                    .ok_or_else(|| {
-                        at_first(fail(format!(
-                            "node `{}` answered step {s} without a report for phase {phase}",
-                            nodes[o].link.name()
-                        )))
-                    })?;
-                next[o] += 1;
-                *seconds.entry(phase.name().to_string()).or_default() += r.seconds;
-                *waiting.entry(phase.name().to_string()).or_default() += r.waited;
-                reports.push(r.report);
-            }
-            all.push(reports);
-        }
-        match next_refused {
-            Some(e) => Err((e, step + 1)),
-            None => Ok(all),
-        }
+    }
+
+    /// The error for nodes that did not answer in time: which phases the silent nodes had;
+    /// not which of them they were in.
+    fn silence(
+        &self,
+        replies: &[Option<Vec<cosim::TimedReport>>],
+        (step, count): (u64, u64),
+        nodes: &[Node],
+        timeout: Duration,
+    ) -> RunError {
+        let silent: Vec<String> = self
+            .per_node
+            .iter()
+            .filter(|(o, _)| replies[*o].is_none())
+            .map(|(o, list)| {
+                let phases: Vec<&str> = list.iter().map(|(p, _, _)| p.name()).collect();
+                let name = nodes[*o].link.name();
+                format!("`{name}` (phases {})", phases.join(", "))
+            })
+            .collect();
+        let steps = if count == 1 {
+            format!("step {step}")
+        } else {
+            format!("steps {step} to {}", step + count - 1)
+        };
+        let other = if self.per_node.len() > 1 {
+            " (one may be waiting for the other)"
+        } else {
+            ""
+        };
+        fail(format!(
+            "{steps}: node {} did not answer within {} s{other}",
+            silent.join(" and "),
+            timeout.as_secs_f64()
+        ))
+    }
+}
+
+/// A node that fails without saying where failed somewhere in the batch of `count` steps
+/// from `step`; the error counts `step` as the steps known to be done.
+fn batch_failed(name: &str, (step, count): (u64, u64), e: LinkFailure) -> (RunError, u64) {
+    if count == 1 {
+        (node_failed(name, step, "", e), step)
+    } else {
+        let last = step + count - 1;
+        let e = node_failed(
+            name,
+            step,
+            &format!("or later, up to {last} (one batch), "),
+            e,
+        );
+        (e, step)
     }
 }
 
