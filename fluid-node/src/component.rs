@@ -146,125 +146,10 @@ impl FluidComponent {
             };
         }
         let run = self.run_mut()?;
-        let has_beads = run.total_beads > 0;
         match phase {
-            Phase::FluidPhaseField => {
-                let no_binary = || {
-                    ComponentError(
-                        "fluid-node: fluid-phase-field needs a binary fluid ([fluid.binary])"
-                            .into(),
-                    )
-                };
-                if run.binary.is_none() {
-                    return Err(no_binary());
-                }
-                if let Some(p) = run.pending {
-                    return Err(ComponentError(format!(
-                        "fluid-node: fluid-phase-field of step {step} requested while the \
-                         penalty of step {p} is still pending"
-                    )));
-                }
-                // The states of step n are those the penalty of step n - 1 read. Read them
-                // only if not held: in a pipelined run the fibre node may publish those of
-                // step n + 1 meanwhile (coordinator/src/pipeline.rs).
-                if has_beads && run.states_step != Some(step) {
-                    run.read_states(step, phase, exchange)?;
-                }
-                let (spm, ns) = (&run.spm, &run.ns);
-                let Some(b) = run.binary.as_mut() else {
-                    return Err(no_binary());
-                };
-                b.phase_field_step(spm, ns.velocity_components())
-                    .map_err(|e| ComponentError(format!("{e} (at step {step})")))?;
-                run.psi_step = Some(step);
-                Ok(PhaseReport {
-                    diagnostics: b.report(spm, detail),
-                    detail,
-                })
-            }
-            Phase::FluidMomentumExchange => {
-                if let Some(p) = run.pending {
-                    return Err(ComponentError(format!(
-                        "fluid-node: fluid-momentum-exchange of step {step} requested while \
-                         the penalty of step {p} is still pending"
-                    )));
-                }
-                if run.binary.is_some() && run.psi_step != Some(step) {
-                    return Err(ComponentError(format!(
-                        "fluid-node: fluid-momentum-exchange of step {step} requested before \
-                         fluid-phase-field of step {step} (a binary fluid runs it first)"
-                    )));
-                }
-                if has_beads {
-                    run.read_states(step, phase, exchange)?;
-                }
-                if let Some(b) = run.binary.as_mut() {
-                    // Eq. 34's capillary terms with psi^{n+1} and phi^{n+1}.
-                    b.load_capillary_force(&run.spm, &mut run.ns, run.cfg.density)
-                        .map_err(ComponentError)?;
-                }
-                // Eq. 34: u^n -> u*. With solids the penalty rebuilds the whole real field,
-                // and until then u* is read only on the solids' rows.
-                if run.spm.has_solids() {
-                    run.ns.advance_intermediate_on(run.spm.solid_rows());
-                } else {
-                    run.ns.advance_intermediate();
-                }
-                let mut total = [0.0; 3];
-                if has_beads {
-                    // Eqs. 35-36.
-                    run.spm
-                        .impulses(run.ns.velocity_components(), &run.states, &mut run.impulses);
-                    for (i, j) in run.impulses.iter().enumerate() {
-                        if j.impulse
-                            .iter()
-                            .chain(&j.angular_impulse)
-                            .any(|v| !v.is_finite())
-                        {
-                            return Err(ComponentError(format!(
-                                "fluid-node: the impulse on bead {i} is not finite at step \
-                                 {step}: the flow or the bead velocities blew up"
-                            )));
-                        }
-                        for (t, v) in total.iter_mut().zip(j.impulse) {
-                            *t += v;
-                        }
-                    }
-                    exchange.publish_impulses(Port::BeadImpulses, step + 1, &run.impulses)?;
-                }
-                run.pending = Some(step);
-                let values = [run.spm.bead_volume(), total[0], total[1], total[2]];
-                Ok(PhaseReport {
-                    diagnostics: EXCHANGE_DIAGNOSTICS
-                        .iter()
-                        .zip(values)
-                        .map(|(n, v)| (n.to_string(), v))
-                        .collect(),
-                    detail: Detail::Full,
-                })
-            }
-            Phase::FluidPenalty => {
-                if run.pending != Some(step) {
-                    return Err(ComponentError(format!(
-                        "fluid-node: fluid-penalty of step {step} requested before \
-                         fluid-momentum-exchange of step {step}"
-                    )));
-                }
-                if has_beads {
-                    run.read_states(step, phase, exchange)?;
-                }
-                if run.spm.has_solids() {
-                    // Eqs. 37-38. The penalty reads u* on the solids' rows at the new
-                    // positions; a sub-cycled fibre may have moved a bead onto a row the
-                    // impulses did not read, and the solver brings such rows up to date.
-                    let (spm, states) = (&run.spm, &run.states);
-                    run.ns.add_projected(spm.solid_rows(), |c, r, u_c, out| {
-                        spm.penalty_row((c, r), u_c, states, out)
-                    });
-                }
-                run.pending = None;
-                run.report(step, detail)
-            }
+            Phase::FluidPhaseField => run.phase_field(step, detail, exchange),
+            Phase::FluidMomentumExchange => run.momentum_exchange(step, exchange),
+            Phase::FluidPenalty => run.penalty(step, detail, exchange),
             other => Err(ComponentError(format!(
                 "fluid-node: phase {other} does not belong to fluid.method = \"spm\" (it \
                  serves fluid-phase-field, fluid-momentum-exchange and fluid-penalty)"
@@ -313,6 +198,148 @@ impl FluidComponent {
 }
 
 impl Run {
+    /// `fluid-phase-field` of step n: the ternary Cahn-Hilliard step to psi^{n+1}.
+    fn phase_field(
+        &mut self,
+        step: u64,
+        detail: Detail,
+        exchange: &mut dyn Exchange,
+    ) -> Result<PhaseReport, ComponentError> {
+        let no_binary = || {
+            ComponentError(
+                "fluid-node: fluid-phase-field needs a binary fluid ([fluid.binary])".into(),
+            )
+        };
+        if self.binary.is_none() {
+            return Err(no_binary());
+        }
+        if let Some(p) = self.pending {
+            return Err(ComponentError(format!(
+                "fluid-node: fluid-phase-field of step {step} requested while the \
+                 penalty of step {p} is still pending"
+            )));
+        }
+        // The states of step n are those the penalty of step n - 1 read. Read them
+        // only if not held: in a pipelined run the fibre node may publish those of
+        // step n + 1 meanwhile (coordinator/src/pipeline.rs).
+        if self.total_beads > 0 && self.states_step != Some(step) {
+            self.read_states(step, Phase::FluidPhaseField, exchange)?;
+        }
+        let (spm, ns) = (&self.spm, &self.ns);
+        let Some(b) = self.binary.as_mut() else {
+            return Err(no_binary());
+        };
+        b.phase_field_step(spm, ns.velocity_components())
+            .map_err(|e| ComponentError(format!("{e} (at step {step})")))?;
+        self.psi_step = Some(step);
+        Ok(PhaseReport {
+            diagnostics: b.report(spm, detail),
+            detail,
+        })
+    }
+
+    /// `fluid-momentum-exchange` of step n: u^n -> u* and the beads' impulses, published
+    /// for step n + 1 (L2020 eqs. 34-36).
+    fn momentum_exchange(
+        &mut self,
+        step: u64,
+        exchange: &mut dyn Exchange,
+    ) -> Result<PhaseReport, ComponentError> {
+        let has_beads = self.total_beads > 0;
+        if let Some(p) = self.pending {
+            return Err(ComponentError(format!(
+                "fluid-node: fluid-momentum-exchange of step {step} requested while \
+                 the penalty of step {p} is still pending"
+            )));
+        }
+        if self.binary.is_some() && self.psi_step != Some(step) {
+            return Err(ComponentError(format!(
+                "fluid-node: fluid-momentum-exchange of step {step} requested before \
+                 fluid-phase-field of step {step} (a binary fluid runs it first)"
+            )));
+        }
+        if has_beads {
+            self.read_states(step, Phase::FluidMomentumExchange, exchange)?;
+        }
+        if let Some(b) = self.binary.as_mut() {
+            // Eq. 34's capillary terms with psi^{n+1} and phi^{n+1}.
+            b.load_capillary_force(&self.spm, &mut self.ns, self.cfg.density)
+                .map_err(ComponentError)?;
+        }
+        // Eq. 34: u^n -> u*. With solids the penalty rebuilds the whole real field,
+        // and until then u* is read only on the solids' rows.
+        if self.spm.has_solids() {
+            self.ns.advance_intermediate_on(self.spm.solid_rows());
+        } else {
+            self.ns.advance_intermediate();
+        }
+        let mut total = [0.0; 3];
+        if has_beads {
+            // Eqs. 35-36.
+            self.spm.impulses(
+                self.ns.velocity_components(),
+                &self.states,
+                &mut self.impulses,
+            );
+            for (i, j) in self.impulses.iter().enumerate() {
+                if j.impulse
+                    .iter()
+                    .chain(&j.angular_impulse)
+                    .any(|v| !v.is_finite())
+                {
+                    return Err(ComponentError(format!(
+                        "fluid-node: the impulse on bead {i} is not finite at step \
+                         {step}: the flow or the bead velocities blew up"
+                    )));
+                }
+                for (t, v) in total.iter_mut().zip(j.impulse) {
+                    *t += v;
+                }
+            }
+            exchange.publish_impulses(Port::BeadImpulses, step + 1, &self.impulses)?;
+        }
+        self.pending = Some(step);
+        let values = [self.spm.bead_volume(), total[0], total[1], total[2]];
+        Ok(PhaseReport {
+            diagnostics: EXCHANGE_DIAGNOSTICS
+                .iter()
+                .zip(values)
+                .map(|(n, v)| (n.to_string(), v))
+                .collect(),
+            detail: Detail::Full,
+        })
+    }
+
+    /// `fluid-penalty` of step n: the rigid-body penalty with the beads' new velocities and
+    /// the projection to u^{n+1} (L2020 eqs. 37-38).
+    fn penalty(
+        &mut self,
+        step: u64,
+        detail: Detail,
+        exchange: &mut dyn Exchange,
+    ) -> Result<PhaseReport, ComponentError> {
+        if self.pending != Some(step) {
+            return Err(ComponentError(format!(
+                "fluid-node: fluid-penalty of step {step} requested before \
+                 fluid-momentum-exchange of step {step}"
+            )));
+        }
+        if self.total_beads > 0 {
+            self.read_states(step, Phase::FluidPenalty, exchange)?;
+        }
+        if self.spm.has_solids() {
+            // Eqs. 37-38. The penalty reads u* on the solids' rows at the new
+            // positions; a sub-cycled fibre may have moved a bead onto a row the
+            // impulses did not read, and the solver brings such rows up to date.
+            let (spm, states) = (&self.spm, &self.states);
+            self.ns.add_projected(spm.solid_rows(), |c, r, u_c, out| {
+                spm.penalty_row((c, r), u_c, states, out)
+            });
+        }
+        self.pending = None;
+        self.report(step, detail)
+    }
+
     /// Read the bead states of step `step`'s phase `phase` and place the profiles: the
     /// states published with step `step + 1` (positions n+1), or with `step` for
     /// `fluid-phase-field` (positions n).
