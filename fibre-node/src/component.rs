@@ -183,6 +183,129 @@ fn active_effects(fibres: &[Fibre]) -> Vec<String> {
 }
 
 impl Run {
+    /// `fibre-forces` of step n (FPD): the beads' forces F^n, published for the lattice.
+    fn fpd_forces(
+        &mut self,
+        step: u64,
+        exchange: &mut dyn Exchange,
+    ) -> Result<PhaseReport, ComponentError> {
+        self.forces.clear();
+        if let Some(c) = &mut self.fibre_contact {
+            c.apply(&mut self.fibres);
+        }
+        for f in self.fibres.iter_mut() {
+            f.fpd_forces();
+            self.forces
+                .extend(f.force.iter().map(|v| BeadForce { force: (*v).into() }));
+        }
+        exchange.publish_forces(Port::BeadForces, step, &self.forces)?;
+        Ok(self.report(false))
+    }
+
+    /// `fibre-advance` of step n (FPD): R^{n+1} = R^n + dt V^{n+1} with the lattice's bead
+    /// velocities of step n + 1.
+    fn fpd_advance(
+        &mut self,
+        step: u64,
+        exchange: &mut dyn Exchange,
+    ) -> Result<(), ComponentError> {
+        let header = exchange.read_states(Port::BeadVelocities, &mut self.velocities)?;
+        if self.velocities.len() != self.total_beads {
+            return Err(ComponentError(format!(
+                "fibre-node: {} bead velocities received for {} beads",
+                self.velocities.len(),
+                self.total_beads
+            )));
+        }
+        if header.step != step + 1 {
+            return Err(ComponentError(format!(
+                "fibre-node: fibre-advance of step {step} read bead velocities of \
+                 step {} (expected {})",
+                header.step,
+                step + 1
+            )));
+        }
+        let dt = self.scene.dt;
+        let mut offset = 0;
+        for f in self.fibres.iter_mut() {
+            let n = f.len();
+            f.fpd_advance(dt, &self.velocities[offset..offset + n]);
+            offset += n;
+        }
+        Ok(())
+    }
+
+    /// `fibre-positions` of step n (SPM): the first half of the split step, positions to
+    /// n + 1.
+    fn advance_positions(&mut self, step: u64) -> Result<(), ComponentError> {
+        if let Some(p) = self.pending {
+            return Err(ComponentError(format!(
+                "fibre-node: fibre-positions of step {step} requested while the \
+                 velocities of step {p} are still pending"
+            )));
+        }
+        let dt = self.scene.dt;
+        match &mut self.fibre_contact {
+            Some(c) => together::advance_positions(&mut self.fibres, c, dt),
+            None => {
+                for f in self.fibres.iter_mut() {
+                    f.advance_positions(dt);
+                }
+            }
+        }
+        self.forces_current = true;
+        self.pending = Some(step);
+        Ok(())
+    }
+
+    /// `fibre-velocities` of step n (SPM): the second half, velocities to n + 1 with the
+    /// fluid's impulses where the scene has a fluid.
+    fn advance_velocities(
+        &mut self,
+        step: u64,
+        exchange: &mut dyn Exchange,
+    ) -> Result<(), ComponentError> {
+        if self.pending != Some(step) {
+            return Err(ComponentError(format!(
+                "fibre-node: fibre-velocities of step {step} requested before \
+                 fibre-positions of step {step}"
+            )));
+        }
+        let impulses = if self.use_impulses {
+            exchange.read_impulses(Port::BeadImpulses, &mut self.impulses)?;
+            if self.impulses.len() != self.total_beads {
+                return Err(ComponentError(format!(
+                    "fibre-node: {} bead impulses received for {} beads",
+                    self.impulses.len(),
+                    self.total_beads
+                )));
+            }
+            Some(&self.impulses[..])
+        } else {
+            None
+        };
+        let dt = self.scene.dt;
+        match &mut self.fibre_contact {
+            Some(c) => together::advance_velocities(
+                &mut self.fibres,
+                c,
+                dt,
+                impulses,
+                &self.offsets,
+                self.forces_current,
+            ),
+            None => {
+                for (k, f) in self.fibres.iter_mut().enumerate() {
+                    let (a, b) = (self.offsets[k], self.offsets[k + 1]);
+                    f.advance_velocities(dt, impulses.map(|j| &j[a..b]), self.forces_current);
+                }
+            }
+        }
+        self.forces_current = true;
+        self.pending = None;
+        Ok(())
+    }
+
     /// The run of `fibres` (set up from `scene`): the watches over overlaps, the contact
     /// between fibres (its forces at the start computed) and buffers for every bead.
     fn new(scene: SceneConfig, mut fibres: Vec<Fibre>) -> Self {
@@ -493,7 +616,6 @@ impl Component for FibreComponent {
         exchange: &mut dyn Exchange,
     ) -> Result<PhaseReport, ComponentError> {
         let run = self.run_mut()?;
-        let dt = run.scene.dt;
         let fpd_phase = matches!(phase, Phase::FibreForces | Phase::FibreAdvance);
         if fpd_phase != (run.coupling == Coupling::Fpd) {
             return Err(ComponentError(format!(
@@ -503,104 +625,10 @@ impl Component for FibreComponent {
             )));
         }
         match phase {
-            Phase::FibreForces => {
-                run.forces.clear();
-                if let Some(c) = &mut run.fibre_contact {
-                    c.apply(&mut run.fibres);
-                }
-                for f in run.fibres.iter_mut() {
-                    f.fpd_forces();
-                    run.forces
-                        .extend(f.force.iter().map(|v| BeadForce { force: (*v).into() }));
-                }
-                exchange.publish_forces(Port::BeadForces, step, &run.forces)?;
-                return Ok(run.report(false));
-            }
-            Phase::FibreAdvance => {
-                let header = exchange.read_states(Port::BeadVelocities, &mut run.velocities)?;
-                if run.velocities.len() != run.total_beads {
-                    return Err(ComponentError(format!(
-                        "fibre-node: {} bead velocities received for {} beads",
-                        run.velocities.len(),
-                        run.total_beads
-                    )));
-                }
-                if header.step != step + 1 {
-                    return Err(ComponentError(format!(
-                        "fibre-node: fibre-advance of step {step} read bead velocities of \
-                         step {} (expected {})",
-                        header.step,
-                        step + 1
-                    )));
-                }
-                let mut offset = 0;
-                for f in run.fibres.iter_mut() {
-                    let n = f.len();
-                    f.fpd_advance(dt, &run.velocities[offset..offset + n]);
-                    offset += n;
-                }
-            }
-            Phase::FibrePositions => {
-                if let Some(p) = run.pending {
-                    return Err(ComponentError(format!(
-                        "fibre-node: fibre-positions of step {step} requested while the \
-                         velocities of step {p} are still pending"
-                    )));
-                }
-                match &mut run.fibre_contact {
-                    Some(c) => together::advance_positions(&mut run.fibres, c, dt),
-                    None => {
-                        for f in run.fibres.iter_mut() {
-                            f.advance_positions(dt);
-                        }
-                    }
-                }
-                run.forces_current = true;
-                run.pending = Some(step);
-            }
-            Phase::FibreVelocities => {
-                if run.pending != Some(step) {
-                    return Err(ComponentError(format!(
-                        "fibre-node: fibre-velocities of step {step} requested before \
-                         fibre-positions of step {step}"
-                    )));
-                }
-                let impulses = if run.use_impulses {
-                    exchange.read_impulses(Port::BeadImpulses, &mut run.impulses)?;
-                    if run.impulses.len() != run.total_beads {
-                        return Err(ComponentError(format!(
-                            "fibre-node: {} bead impulses received for {} beads",
-                            run.impulses.len(),
-                            run.total_beads
-                        )));
-                    }
-                    Some(&run.impulses[..])
-                } else {
-                    None
-                };
-                match &mut run.fibre_contact {
-                    Some(c) => together::advance_velocities(
-                        &mut run.fibres,
-                        c,
-                        dt,
-                        impulses,
-                        &run.offsets,
-                        run.forces_current,
-                    ),
-                    None => {
-                        for (k, f) in run.fibres.iter_mut().enumerate() {
-                            let (a, b) = (run.offsets[k], run.offsets[k + 1]);
-                            f.advance_velocities(
-                                dt,
-                                impulses.map(|j| &j[a..b]),
-                                run.forces_current,
-                            );
-                        }
-                    }
-                }
-                run.forces_current = true;
-                run.pending = None;
-            }
+            Phase::FibreForces => return run.fpd_forces(step, exchange),
+            Phase::FibreAdvance => run.fpd_advance(step, exchange)?,
+            Phase::FibrePositions => run.advance_positions(step)?,
+            Phase::FibreVelocities => run.advance_velocities(step, exchange)?,
             other => {
                 return Err(ComponentError(format!(
                     "fibre-node does not serve phase {other} (it serves fibre-positions, \
