@@ -58,6 +58,33 @@ fn unknown_top_level_key() {
     check("unknown-top", &format!("colour = 3\n{GOOD}"), &["colour"]);
 }
 
+/// A mistyped key is answered with the key it most likely meant, whoever reads it: the
+/// coordinator (`time`), the fibre node (`fibre.N`), the fluid node (`fluid`), or `--set`.
+#[test]
+fn a_mistyped_key_gets_a_guess() {
+    check(
+        "typo-time",
+        &GOOD.replace("steps = 10", "step = 10"),
+        &["key `time.step`: unknown key `step`, did you mean `steps`?"],
+    );
+    check(
+        "typo-fibre",
+        &GOOD.replace("youngs_modulus", "youngs_modulu"),
+        &["fibre.0: unknown key `youngs_modulu`, did you mean `youngs_modulus`?"],
+    );
+    check(
+        "typo-fluid",
+        "dimensions = 2\n[time]\ndt = 0.1\nsteps = 10\n\
+         [fluid]\nmethod = \"spm\"\ngrid = [32, 32]\nviscosty = 1.0\n",
+        &["fluid.viscosty: unknown key (set to 1.0), did you mean `viscosity`?"],
+    );
+    let p = write_scene("typo-set", GOOD);
+    expect_error(
+        &["check", p.to_str().unwrap(), "--set", "tiem.steps=3"],
+        &["the scene has no `tiem`, did you mean `time`?"],
+    );
+}
+
 #[test]
 fn unknown_fibre_key() {
     check(

@@ -200,7 +200,9 @@ fn parse_checked(value: toml::Value, origin: &str) -> Result<Scene, SceneError> 
     let scene: Scene = serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.into_inner().to_string();
-        let inner = inner.trim();
+        // toml appends "in `key`", which the path already says.
+        let first = inner.lines().next().unwrap_or("").trim_end();
+        let inner = cosim::scene_keys::unknown_key(first).unwrap_or_else(|| inner.trim().into());
         if path == "." || path.is_empty() {
             err(format!("{origin}: {inner}"))
         } else {
@@ -275,7 +277,8 @@ pub fn apply_override(root: &mut toml::Value, spec: &str) -> Result<(), SceneErr
                 }
                 if !t.contains_key(*part) {
                     return Err(err(format!(
-                        "--set {spec}: the scene has no `{so_far}` (it has: {})",
+                        "--set {spec}: the scene has no `{so_far}`{} (it has: {})",
+                        cosim::scene_keys::did_you_mean(part, t.keys().map(String::as_str)),
                         keys(t)
                     )));
                 }

@@ -16,18 +16,13 @@ pub fn serde_message(prefix: &str, path: &serde_path_to_error::Path, msg: &str) 
     // toml appends "in `key`" lines; the first line is serde's message.
     let msg = msg.lines().next().unwrap_or("").trim_end();
     let quoted = msg.split('`').nth(1).unwrap_or("");
-    if msg.starts_with("unknown field ") {
-        // "unknown field `foo`, expected one of `a`, `b`": the path ends at the key itself;
-        // report the table holding it.
+    if let Some(unknown) = unknown_key(msg) {
+        // The path ends at the key itself; report the table holding it.
         let table = full
             .strip_suffix(&format!(".{quoted}"))
             .unwrap_or(&full)
             .to_string();
-        let expected = msg
-            .split_once(", expected ")
-            .map(|(_, e)| format!(" (expected {e})"))
-            .unwrap_or_default();
-        return format!("{table}: unknown key `{quoted}`{expected}");
+        return format!("{table}: {unknown}");
     }
     if msg.starts_with("missing field ") {
         return format!("{full}.{quoted}: required key is missing");
@@ -38,6 +33,37 @@ pub fn serde_message(prefix: &str, path: &serde_path_to_error::Path, msg: &str) 
         .replace("expected an array of length 3", "expected [x, y, z]")
         .replace("expected a sequence", "expected an array");
     format!("{full}: {msg}")
+}
+
+/// serde's "unknown field `foo`, expected one of `a`, `b`" (first line) as "unknown key
+/// `foo` (expected one of `a`, `b`)", with a guess at the key meant ([`did_you_mean`]);
+/// `None` for any other message.
+pub fn unknown_key(msg: &str) -> Option<String> {
+    let (word, rest) = msg.strip_prefix("unknown field `")?.split_once('`')?;
+    let expected = rest.strip_prefix(", expected ");
+    let hint = expected.map_or_else(String::new, |e| {
+        did_you_mean(word, e.split('`').skip(1).step_by(2))
+    });
+    let expected = expected
+        .map(|e| format!(" (expected {e})"))
+        .unwrap_or_default();
+    Some(format!("unknown key `{word}`{hint}{expected}"))
+}
+
+/// `, did you mean `KEY`?` for the candidate a mistyped `word` most likely meant, else
+/// nothing: the closest by optimal string alignment distance (a swap of two neighbours
+/// counts once), if at most a third of the word's length (at least 1) away; the first of
+/// equally close ones.
+pub fn did_you_mean<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> String {
+    let allowed = (word.chars().count() / 3).max(1);
+    let mut best: Option<(usize, &str)> = None;
+    for c in candidates {
+        let d = strsim::osa_distance(word, c);
+        if d <= allowed && best.is_none_or(|(b, _)| d < b) {
+            best = Some((d, c));
+        }
+    }
+    best.map_or_else(String::new, |(_, c)| format!(", did you mean `{c}`?"))
 }
 
 /// Deserialize the table `v` found at the dotted path `prefix`.
@@ -263,5 +289,46 @@ mod wall_shear_tests {
             .contains("fluid.grid = [nx, ny]"));
         let thin = parse_table(&SPM.replace("168", "8")).unwrap();
         assert!(wall_shear(&thin, "k").unwrap_err().contains("leaves 0"));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const KEYS: [&str; 4] = ["beads", "bead_radius", "force", "time"];
+
+    #[test]
+    fn a_near_miss_gets_the_key_it_most_likely_meant() {
+        assert_eq!(did_you_mean("bead", KEYS), ", did you mean `beads`?");
+        assert_eq!(did_you_mean("forse", KEYS), ", did you mean `force`?");
+        assert_eq!(did_you_mean("tiem", KEYS), ", did you mean `time`?");
+        assert_eq!(
+            did_you_mean("bead_raduis", KEYS),
+            ", did you mean `bead_radius`?"
+        );
+    }
+
+    #[test]
+    fn a_word_far_from_every_key_gets_no_guess() {
+        assert_eq!(did_you_mean("foo", KEYS), "");
+        assert_eq!(did_you_mean("colour", KEYS), "");
+        assert_eq!(did_you_mean("x", KEYS), "");
+    }
+
+    #[test]
+    fn the_unknown_key_message_names_the_guess_before_the_list() {
+        #[derive(Deserialize, Debug)]
+        #[serde(deny_unknown_fields)]
+        #[allow(dead_code)]
+        struct Fibre {
+            beads: i64,
+        }
+        let v: toml::Value = toml::from_str("bead = 3").unwrap();
+        let e = deserialize_at::<Fibre>("fibre.0", v).unwrap_err();
+        assert_eq!(
+            e,
+            "fibre.0: unknown key `bead`, did you mean `beads`? (expected `beads`)"
+        );
     }
 }

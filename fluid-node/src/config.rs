@@ -140,15 +140,18 @@ const FLUID_KEYS: [&str; 9] = [
 const WALLS_KEYS: [&str; 2] = ["velocity", "thickness"];
 
 /// Refuse a key of `table` (at `prefix`) that is not in `known`, naming it and its value.
-fn known_keys(prefix: &str, table: &toml::Value, known: &[&str]) -> Result<(), String> {
+pub(crate) fn known_keys(prefix: &str, table: &toml::Value, known: &[&str]) -> Result<(), String> {
     if let Some(t) = table.as_table() {
         if let Some((k, v)) = t.iter().find(|(k, _)| !known.contains(&k.as_str())) {
             let list: Vec<String> = known.iter().map(|k| format!("`{k}`")).collect();
-            return Err(format!(
-                "{prefix}.{k}: unknown key (set to {}); expected one of {}",
-                describe_toml(v),
-                list.join(", ")
-            ));
+            let hint = scene_keys::did_you_mean(k, known.iter().copied());
+            let list = list.join(", ");
+            let v = describe_toml(v);
+            return Err(if hint.is_empty() {
+                format!("{prefix}.{k}: unknown key (set to {v}); expected one of {list}")
+            } else {
+                format!("{prefix}.{k}: unknown key (set to {v}){hint} (expected one of {list})")
+            });
         }
     }
     Ok(())

@@ -161,14 +161,7 @@ pub fn parse(
             describe_toml(value)
         ));
     };
-    if let Some((k, v)) = t.iter().find(|(k, _)| !BINARY_KEYS.contains(&k.as_str())) {
-        let list: Vec<String> = BINARY_KEYS.iter().map(|k| format!("`{k}`")).collect();
-        return Err(format!(
-            "fluid.binary.{k}: unknown key (set to {}); expected one of {}",
-            describe_toml(v),
-            list.join(", ")
-        ));
-    }
+    crate::config::known_keys("fluid.binary", value, &BINARY_KEYS)?;
     let tb = Table { t };
     let xi = tb.positive("xi")?.unwrap_or(DEFAULT_XI);
     let e0 = tb.energy_density(xi)?;
