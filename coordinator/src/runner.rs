@@ -246,8 +246,9 @@ pub fn check_fit(scene: &LoadedScene, plan: &Plan, d: &ModelDescription) -> Resu
         let model = f.get("model").and_then(|m| m.as_str()).unwrap_or("");
         if !model.is_empty() && !d.models.iter().any(|m| m == model) {
             return Err(fail(format!(
-                "key `fibre.{i}.model`: `{model}` is not a model of {} (it has: {})",
+                "key `fibre.{i}.model`: `{model}` is not a model of {}{} (it has: {})",
                 d.name,
+                cosim::scene_keys::did_you_mean(model, d.models.iter().map(String::as_str)),
                 d.models.join(", ")
             )));
         }

@@ -64,7 +64,8 @@ pub fn plan(scene: &LoadedScene) -> Result<Plan, String> {
     }
     if method != "spm" {
         return Err(format!(
-            "key `fluid.method`: `{method}` is not a fluid method (available: spm, fpd-lbm)"
+            "key `fluid.method`: `{method}` is not a fluid method{} (available: spm, fpd-lbm)",
+            cosim::scene_keys::did_you_mean(method, ["spm", "fpd-lbm"])
         ));
     }
     let binary = fluid.contains_key("binary");
