@@ -581,7 +581,6 @@ fn drive(
     let radii = radii(scene);
     let beads = st.configured.beads_per_fibre.clone();
     let has_beads = !beads.is_empty();
-    let mut states: Vec<BeadState> = Vec::new();
     let track = has_beads
         && scene
             .scene
@@ -589,38 +588,22 @@ fn drive(
             .metrics
             .iter()
             .any(|m| crate::metrics::needs_trajectory(m));
-    let mut trajectory = crate::trajectory::Trajectory::default();
     let dt = scene.scene.time.dt;
     let steps = scene.scene.time.steps;
-    let resumed = match &opts.resume {
-        Some(dir) => Some(resume(scene, dir, nodes, steps)?),
-        None => None,
-    };
-    let first_step = resumed.as_ref().map_or(0, |ck| ck.step);
-    if let Some(ck) = &resumed {
-        st.time = ck.time;
-        st.steps_done = ck.step;
-        st.wall_before = ck.wall_seconds;
-        st.resumed_from = Some(ck.step);
-        trajectory = ck.trajectory.clone();
-        st.watches = ck.watches;
-    }
-    if has_beads {
-        exchange
-            .read_states(Port::BeadStates, &mut states)
-            .map_err(|e| fail(format!("reading the initial bead states: {e}")))?;
-        log.bead_states(first_step, st.time, &beads, &radii, &states)
-            .map_err(fail)?;
-    }
-    // The metrics compare with step 0, which a resumed run has from its checkpoint.
-    let initial = match &resumed {
-        Some(ck) => ck.initial_states(),
-        None => states.clone(),
-    };
-    if track && resumed.is_none() {
-        trajectory.push(0.0, &states, beads[0]);
-        trajectory.push_shape(0.0, &states, beads[0]);
-    }
+    let Start {
+        first_step,
+        mut states,
+        initial,
+        mut trajectory,
+        resumed,
+    } = start(
+        scene,
+        opts,
+        nodes,
+        (&mut *exchange, log),
+        (&beads, &radii, track),
+        st,
+    )?;
     let shape_every = (steps / crate::trajectory::SHAPE_SNAPSHOTS).max(1);
 
     let interval = scene.output_interval();
@@ -644,9 +627,10 @@ fn drive(
         crate::field_snapshots::Snapshots::new(&opts.out, scene.fields_interval(), periodic_y);
     let fields_every = snapshots.as_ref().map_or(0, |s| s.every());
     if let Some(snap) = snapshots.as_mut() {
-        match &resumed {
-            Some(_) => snap.keep_earlier(st.time),
-            None => snap.write((first_step, st.time), nodes, (&beads, &radii), &states, log)?,
+        if resumed {
+            snap.keep_earlier(st.time);
+        } else {
+            snap.write((first_step, st.time), nodes, (&beads, &radii), &states, log)?;
         }
     }
     let rests = scene.scene.time.rest_tolerance.is_some();
@@ -767,6 +751,67 @@ fn drive(
     };
     conclude(scene, opts, plan, &mut *exchange, end, st)?;
     Ok(status)
+}
+
+/// Where a run starts: step 0, or a checkpoint's step.
+struct Start {
+    first_step: u64,
+    /// The bead states at `first_step`, as read from the fibre node and logged.
+    states: Vec<BeadState>,
+    /// The bead states at step 0, which the metrics compare with.
+    initial: Vec<BeadState>,
+    trajectory: crate::trajectory::Trajectory,
+    resumed: bool,
+}
+
+/// Read the first bead states and log them; a resumed run takes its step, time, trajectory
+/// and overlap watches from the checkpoint (`--resume`), a fresh one starts its trajectory.
+fn start(
+    scene: &LoadedScene,
+    opts: &RunOptions,
+    nodes: &mut [Node],
+    (exchange, log): (&mut dyn cosim::Exchange, &mut RunLog),
+    (beads, radii, track): (&[usize], &[f64], bool),
+    st: &mut RunState,
+) -> Result<Start, RunError> {
+    let mut states: Vec<BeadState> = Vec::new();
+    let mut trajectory = crate::trajectory::Trajectory::default();
+    let resumed = match &opts.resume {
+        Some(dir) => Some(resume(scene, dir, nodes, scene.scene.time.steps)?),
+        None => None,
+    };
+    let first_step = resumed.as_ref().map_or(0, |ck| ck.step);
+    if let Some(ck) = &resumed {
+        st.time = ck.time;
+        st.steps_done = ck.step;
+        st.wall_before = ck.wall_seconds;
+        st.resumed_from = Some(ck.step);
+        trajectory = ck.trajectory.clone();
+        st.watches = ck.watches;
+    }
+    if !beads.is_empty() {
+        exchange
+            .read_states(Port::BeadStates, &mut states)
+            .map_err(|e| fail(format!("reading the initial bead states: {e}")))?;
+        log.bead_states(first_step, st.time, beads, radii, &states)
+            .map_err(fail)?;
+    }
+    // The metrics compare with step 0, which a resumed run has from its checkpoint.
+    let initial = match &resumed {
+        Some(ck) => ck.initial_states(),
+        None => states.clone(),
+    };
+    if track && resumed.is_none() {
+        trajectory.push(0.0, &states, beads[0]);
+        trajectory.push_shape(0.0, &states, beads[0]);
+    }
+    Ok(Start {
+        first_step,
+        states,
+        initial,
+        trajectory,
+        resumed: resumed.is_some(),
+    })
 }
 
 /// Which node runs each phase of the schedule (an index into `nodes`).
