@@ -178,62 +178,22 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         Some(toml::Value::String(m)) if m == "fpd-lbm" => Coupling::Fpd,
         _ => Coupling::Spm,
     };
-    let fluid_density = table
-        .get("fluid")
-        .and_then(|f| f.get("density"))
-        .and_then(toml_number)
-        .filter(|r| r.is_finite() && *r > 0.0)
-        .unwrap_or(1.0);
-    let fluid_kinematic_viscosity = table
-        .get("fluid")
-        .and_then(|f| f.get("viscosity"))
-        .and_then(toml_number)
-        .filter(|v| v.is_finite() && *v > 0.0)
-        .map(|v| v / fluid_density);
-    let fpd_interface_ratio = (coupling == Coupling::Fpd).then(|| {
-        table
-            .get("fluid")
-            .and_then(|f| f.get("interface_ratio"))
-            .and_then(toml_number)
-            .filter(|r| r.is_finite() && *r > 0.0)
-            .unwrap_or(DEFAULT_FPD_INTERFACE_RATIO)
-    });
-    // The fluid node validates these; here they only size the profile's inertia.
+    // The fluid node validates its keys; here they only size the beads' exchange with it.
+    let fluid_density = fluid_number(&table, "density").unwrap_or(1.0);
+    let fluid_kinematic_viscosity = fluid_number(&table, "viscosity").map(|v| v / fluid_density);
+    let fpd_interface_ratio = (coupling == Coupling::Fpd)
+        .then(|| fluid_number(&table, "interface_ratio").unwrap_or(DEFAULT_FPD_INTERFACE_RATIO));
     let spm_profile = (coupling == Coupling::Spm).then(|| {
-        let key = |k: &str| {
-            table
-                .get("fluid")
-                .and_then(|f| f.get(k))
-                .and_then(toml_number)
-                .filter(|x| x.is_finite() && *x > 0.0)
-        };
-        let xi = key("xi").unwrap_or(DEFAULT_XI);
+        let xi = fluid_number(&table, "xi").unwrap_or(DEFAULT_XI);
         SmoothedProfile {
             xi,
-            cutoff: key("xi_cutoff").unwrap_or(DEFAULT_CUTOFF_OVER_XI * xi),
+            cutoff: fluid_number(&table, "xi_cutoff").unwrap_or(DEFAULT_CUTOFF_OVER_XI * xi),
         }
     });
 
-    let list = match table.get("fibre") {
-        None => return Err(
-            "fibre: the scene has no [[fibre]] table, so the fibre node has nothing to simulate"
-                .into(),
-        ),
-        Some(toml::Value::Array(a)) => a.clone(),
-        Some(v) => {
-            return Err(format!(
-                "fibre: expected an array of tables ([[fibre]]), got {}",
-                describe_toml(v)
-            ))
-        }
-    };
-    if list.is_empty() {
-        return Err("fibre: the scene's fibre list is empty".into());
-    }
-
     let wall_faces = scene_keys::wall_faces(&table);
-    let mut fibres = Vec::with_capacity(list.len());
-    for (n, v) in list.into_iter().enumerate() {
+    let mut fibres = Vec::new();
+    for (n, v) in fibre_tables(&table)?.into_iter().enumerate() {
         let prefix = format!("fibre.{n}");
         if !v.is_table() {
             return Err(format!(
@@ -244,41 +204,9 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         let raw: RawFibre = deserialize(&prefix, v)?;
         fibres.push(validate_fibre(&prefix, raw, dimensions, wall_faces)?);
     }
-
     for (n, f) in fibres.iter_mut().enumerate() {
-        if f.implicit_exchange && coupling != Coupling::Spm {
-            return Err(format!(
-                "fibre.{n}.exchange = \"implicit\": only the SPM fluid (fluid.method = \"spm\") \
-                 exchanges momentum with the beads; remove the key"
-            ));
-        }
-        if f.spin_with_chord && coupling != Coupling::Spm {
-            return Err(format!(
-                "fibre.{n}.bead_spin = \"chord\": read for a scene with the SPM fluid \
-                 (fluid.method = \"spm\"), where a bead's spin is otherwise its own; use \
-                 \"free\" or remove the key"
-            ));
-        }
-        if f.profile_inertia && coupling != Coupling::Spm {
-            return Err(format!(
-                "fibre.{n}.bead_inertia = \"profile\": only the SPM fluid (fluid.method = \"spm\") \
-                 gives beads a smoothed profile; use \"solid\" or remove the key"
-            ));
-        }
-        let p = format!("fibre.{n}");
-        if f.centred {
-            f.start = centre_in_gap(&table, &p, f)?;
-        }
-        if let Some(k) = f.bending_number {
-            let kb = stiffness_from_group(&table, &p, f, FibreGroup::Bending, k, coupling)?;
-            f.bending_stiffness = Some(kb);
-        }
-        if let Some(k) = f.stretch_number {
-            let ks = stiffness_from_group(&table, &p, f, FibreGroup::Stretch, k, coupling)?;
-            f.stretch_stiffness = Some(ks);
-        }
+        resolve_with_flow(&table, &format!("fibre.{n}"), f, coupling)?;
     }
-
     check_fibre_contact(&fibres)?;
 
     Ok(SceneConfig {
@@ -297,6 +225,77 @@ pub fn parse_scene(scene_toml: &str) -> Result<SceneConfig, String> {
         periodic_box: periodic_box(&table, dimensions),
         fibres,
     })
+}
+
+/// `fluid.KEY` where it is a positive finite number.
+fn fluid_number(table: &toml::Table, key: &str) -> Option<f64> {
+    table
+        .get("fluid")
+        .and_then(|f| f.get(key))
+        .and_then(toml_number)
+        .filter(|x| x.is_finite() && *x > 0.0)
+}
+
+/// The `[[fibre]]` array: present and not empty.
+fn fibre_tables(table: &toml::Table) -> Result<Vec<toml::Value>, String> {
+    let list = match table.get("fibre") {
+        None => return Err(
+            "fibre: the scene has no [[fibre]] table, so the fibre node has nothing to simulate"
+                .into(),
+        ),
+        Some(toml::Value::Array(a)) => a.clone(),
+        Some(v) => {
+            return Err(format!(
+                "fibre: expected an array of tables ([[fibre]]), got {}",
+                describe_toml(v)
+            ))
+        }
+    };
+    if list.is_empty() {
+        return Err("fibre: the scene's fibre list is empty".into());
+    }
+    Ok(list)
+}
+
+/// What a fibre's keys mean with the scene's flow: the SPM-only keys refused under another
+/// coupling, `centred` placed in the gap, S2023's groups K and K_s turned into stiffnesses.
+fn resolve_with_flow(
+    table: &toml::Table,
+    p: &str,
+    f: &mut FibreConfig,
+    coupling: Coupling,
+) -> Result<(), String> {
+    if f.implicit_exchange && coupling != Coupling::Spm {
+        return Err(format!(
+            "{p}.exchange = \"implicit\": only the SPM fluid (fluid.method = \"spm\") \
+             exchanges momentum with the beads; remove the key"
+        ));
+    }
+    if f.spin_with_chord && coupling != Coupling::Spm {
+        return Err(format!(
+            "{p}.bead_spin = \"chord\": read for a scene with the SPM fluid \
+             (fluid.method = \"spm\"), where a bead's spin is otherwise its own; use \
+             \"free\" or remove the key"
+        ));
+    }
+    if f.profile_inertia && coupling != Coupling::Spm {
+        return Err(format!(
+            "{p}.bead_inertia = \"profile\": only the SPM fluid (fluid.method = \"spm\") \
+             gives beads a smoothed profile; use \"solid\" or remove the key"
+        ));
+    }
+    if f.centred {
+        f.start = centre_in_gap(table, p, f)?;
+    }
+    if let Some(k) = f.bending_number {
+        let kb = stiffness_from_group(table, p, f, FibreGroup::Bending, k, coupling)?;
+        f.bending_stiffness = Some(kb);
+    }
+    if let Some(k) = f.stretch_number {
+        let ks = stiffness_from_group(table, p, f, FibreGroup::Stretch, k, coupling)?;
+        f.stretch_stiffness = Some(ks);
+    }
+    Ok(())
 }
 
 /// `fibre.N.fibre_contact` needs a second fibre with the key, and every fibre of the scene
