@@ -347,57 +347,7 @@ pub fn compute(
             n if crate::interface_metrics::INTERFACE_METRICS.contains(&n) => {
                 crate::interface_metrics::interface_metric(n, ctx)?
             }
-            "tumbling_period_gamma" => {
-                let gamma = lookup(ctx.derived, "fluid.shear_rate")
-                    .ok_or("metric `tumbling_period_gamma` needs walls (a shear rate)")?;
-                let period = ctx.trajectory.period().ok_or(
-                    "metric `tumbling_period_gamma`: fibre 0 did not pass the vertical twice; run longer",
-                )?;
-                let n = *ctx
-                    .beads_per_fibre
-                    .first()
-                    .ok_or("the scene has no fibre")?;
-                let harris_pittman = crate::reference::jeffery::chain_period_gamma(n);
-                let mut m = match (stokes_2d_chain(ctx, n), stokes_3d_chain(ctx, n)) {
-                    (Some(b), _) => {
-                        let mut m = Metric::with_reference(
-                            gamma * period,
-                            stokes::period_gamma(b),
-                            "2D Stokes flow past the same rigid chain of touching discs, \
-                             unbounded, sharp surfaces (boundary integral solution, \
-                             coordinator/src/reference/stokes_chain_2d.rs)",
-                        );
-                        m.extra.insert("harris_pittman".into(), harris_pittman);
-                        m
-                    }
-                    (None, Some(b)) => {
-                        let mut m = Metric::with_reference(
-                            gamma * period,
-                            crate::reference::stokes_chain_3d::period_gamma(b),
-                            "3D Stokes flow past the same rigid chain of touching spheres, \
-                             unbounded, tumbling in the shear plane (rigid multiblob \
-                             solution, coordinator/src/reference/stokes_chain_3d.rs)",
-                        );
-                        m.extra.insert("harris_pittman".into(), harris_pittman);
-                        m
-                    }
-                    (None, None) => Metric::with_reference(
-                        gamma * period,
-                        harris_pittman,
-                        "Jeffery, gamma T = 2 pi (e + 1/e) with the equivalent ellipse e = 1.14 \
-                         N_b^0.844 of Harris & Pittman (L2020 appendix B)",
-                    ),
-                };
-                m.extra.insert(
-                    "reference_md_table".into(),
-                    crate::reference::jeffery::chain_period_gamma_table(n),
-                );
-                m.extra.insert(
-                    "passes_through_vertical".into(),
-                    ctx.trajectory.vertical_crossings().len() as f64,
-                );
-                m
-            }
+            "tumbling_period_gamma" => tumbling_period(ctx)?,
             "min_end_to_end_over_length" => plain(
                 ctx.trajectory
                     .min_end_to_end_ratio()
@@ -425,6 +375,61 @@ pub fn compute(
     }
     out.extend(beam_metrics(&beam_names, ctx, dimensionless)?);
     Ok(out)
+}
+
+/// `tumbling_period_gamma`: gamma T of fibre 0 against the same rigid chain in unbounded
+/// Stokes flow (2D or 3D, where the chain is one the references solve), else Harris &
+/// Pittman's law; REFERENCE.md's table and Harris & Pittman ride along in `extra`.
+fn tumbling_period(ctx: &Context) -> Result<Metric, String> {
+    let gamma = lookup(ctx.derived, "fluid.shear_rate")
+        .ok_or("metric `tumbling_period_gamma` needs walls (a shear rate)")?;
+    let period = ctx.trajectory.period().ok_or(
+        "metric `tumbling_period_gamma`: fibre 0 did not pass the vertical twice; run longer",
+    )?;
+    let n = *ctx
+        .beads_per_fibre
+        .first()
+        .ok_or("the scene has no fibre")?;
+    let harris_pittman = crate::reference::jeffery::chain_period_gamma(n);
+    let mut m = match (stokes_2d_chain(ctx, n), stokes_3d_chain(ctx, n)) {
+        (Some(b), _) => {
+            let mut m = Metric::with_reference(
+                gamma * period,
+                stokes::period_gamma(b),
+                "2D Stokes flow past the same rigid chain of touching discs, \
+                     unbounded, sharp surfaces (boundary integral solution, \
+                     coordinator/src/reference/stokes_chain_2d.rs)",
+            );
+            m.extra.insert("harris_pittman".into(), harris_pittman);
+            m
+        }
+        (None, Some(b)) => {
+            let mut m = Metric::with_reference(
+                gamma * period,
+                crate::reference::stokes_chain_3d::period_gamma(b),
+                "3D Stokes flow past the same rigid chain of touching spheres, \
+                     unbounded, tumbling in the shear plane (rigid multiblob \
+                     solution, coordinator/src/reference/stokes_chain_3d.rs)",
+            );
+            m.extra.insert("harris_pittman".into(), harris_pittman);
+            m
+        }
+        (None, None) => Metric::with_reference(
+            gamma * period,
+            harris_pittman,
+            "Jeffery, gamma T = 2 pi (e + 1/e) with the equivalent ellipse e = 1.14 \
+                 N_b^0.844 of Harris & Pittman (L2020 appendix B)",
+        ),
+    };
+    m.extra.insert(
+        "reference_md_table".into(),
+        crate::reference::jeffery::chain_period_gamma_table(n),
+    );
+    m.extra.insert(
+        "passes_through_vertical".into(),
+        ctx.trajectory.vertical_crossings().len() as f64,
+    );
+    Ok(m)
 }
 
 /// S2023's Jeffery fit for a rigid chain of 10 beads at C = 0.2, Re_ps << 1 (Fig. 5a).
