@@ -78,6 +78,11 @@ fn a_mistyped_key_gets_a_guess() {
          [fluid]\nmethod = \"spm\"\ngrid = [32, 32]\nviscosty = 1.0\n",
         &["fluid.viscosty: unknown key (set to 1.0), did you mean `viscosity`?"],
     );
+    check(
+        "typo-metric",
+        &format!("{GOOD}[analysis]\nmetrics = [\"tip_deflection\"]\n"),
+        &["unknown metric `tip_deflection`, did you mean `tip_deflection_over_length`?"],
+    );
     let p = write_scene("typo-set", GOOD);
     expect_error(
         &["check", p.to_str().unwrap(), "--set", "tiem.steps=3"],

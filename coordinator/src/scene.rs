@@ -242,7 +242,8 @@ fn check_ranges(s: &Scene) -> Result<(), SceneError> {
     for m in &s.analysis.metrics {
         if !crate::metrics::KNOWN.contains(&m.as_str()) {
             return Err(err(format!(
-                "key `analysis.metrics`: unknown metric `{m}` (known: {})",
+                "key `analysis.metrics`: unknown metric `{m}`{} (known: {})",
+                cosim::scene_keys::did_you_mean(m, crate::metrics::KNOWN.iter().copied()),
                 crate::metrics::KNOWN.join(", ")
             )));
         }

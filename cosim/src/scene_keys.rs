@@ -52,18 +52,29 @@ pub fn unknown_key(msg: &str) -> Option<String> {
 
 /// `, did you mean `KEY`?` for the candidate a mistyped `word` most likely meant, else
 /// nothing: the closest by optimal string alignment distance (a swap of two neighbours
-/// counts once), if at most a third of the word's length (at least 1) away; the first of
-/// equally close ones.
+/// counts once), if at most a third of the word's length (at least 1) away; failing that,
+/// the shortest candidate the word begins (a word of four letters or more, such as
+/// `tumbling_period` for `tumbling_period_gamma`). The first of equally good ones.
 pub fn did_you_mean<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> String {
     let allowed = (word.chars().count() / 3).max(1);
-    let mut best: Option<(usize, &str)> = None;
+    let mut closest: Option<(usize, &str)> = None;
+    let mut completion: Option<&str> = None;
     for c in candidates {
         let d = strsim::osa_distance(word, c);
-        if d <= allowed && best.is_none_or(|(b, _)| d < b) {
-            best = Some((d, c));
+        if d <= allowed && closest.is_none_or(|(b, _)| d < b) {
+            closest = Some((d, c));
+        }
+        if word.chars().count() >= 4
+            && c.starts_with(word)
+            && completion.is_none_or(|b| c.len() < b.len())
+        {
+            completion = Some(c);
         }
     }
-    best.map_or_else(String::new, |(_, c)| format!(", did you mean `{c}`?"))
+    closest
+        .map(|(_, c)| c)
+        .or(completion)
+        .map_or_else(String::new, |c| format!(", did you mean `{c}`?"))
 }
 
 /// Deserialize the table `v` found at the dotted path `prefix`.
@@ -296,7 +307,13 @@ mod wall_shear_tests {
 mod tests {
     use super::*;
 
-    const KEYS: [&str; 4] = ["beads", "bead_radius", "force", "time"];
+    const KEYS: [&str; 5] = [
+        "beads",
+        "bead_radius",
+        "force",
+        "time",
+        "tumbling_period_gamma",
+    ];
 
     #[test]
     fn a_near_miss_gets_the_key_it_most_likely_meant() {
@@ -314,6 +331,8 @@ mod tests {
         assert_eq!(did_you_mean("foo", KEYS), "");
         assert_eq!(did_you_mean("colour", KEYS), "");
         assert_eq!(did_you_mean("x", KEYS), "");
+        // Too short to complete: `tim` is one edit from `time`, `tu` is nothing.
+        assert_eq!(did_you_mean("tu", KEYS), "");
     }
 
     #[test]
