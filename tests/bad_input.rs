@@ -83,6 +83,17 @@ fn a_mistyped_key_gets_a_guess() {
         &format!("{GOOD}[analysis]\nmetrics = [\"tip_deflection\"]\n"),
         &["unknown metric `tip_deflection`, did you mean `tip_deflection_over_length`?"],
     );
+    let scene = write_scene("typo-study", GOOD);
+    let study = scene.with_file_name("typo.study.toml");
+    std::fs::write(
+        &study,
+        "name = \"typo\"\nscene = \"scene.toml\"\nmetrik = \"tip_rotation\"\n",
+    )
+    .unwrap();
+    expect_error(
+        &["study", study.to_str().unwrap(), "--check"],
+        &["unknown key `metrik`, did you mean `metric`?"],
+    );
     let p = write_scene("typo-set", GOOD);
     expect_error(
         &["check", p.to_str().unwrap(), "--set", "tiem.steps=3"],

@@ -200,9 +200,7 @@ fn parse_checked(value: toml::Value, origin: &str) -> Result<Scene, SceneError> 
     let scene: Scene = serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.into_inner().to_string();
-        // toml appends "in `key`", which the path already says.
-        let first = inner.lines().next().unwrap_or("").trim_end();
-        let inner = cosim::scene_keys::unknown_key(first).unwrap_or_else(|| inner.trim().into());
+        let inner = cosim::scene_keys::unknown_key(&inner).unwrap_or_else(|| inner.trim().into());
         if path == "." || path.is_empty() {
             err(format!("{origin}: {inner}"))
         } else {

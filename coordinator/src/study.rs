@@ -231,12 +231,10 @@ fn load(path: &Path) -> Result<(Study, PathBuf), String> {
             )
         })?)
         .map_err(|e| {
-            format!(
-                "{}: key `{}`: {}",
-                path.display(),
-                e.path(),
-                e.inner().to_string().trim()
-            )
+            let inner = e.inner().to_string();
+            let inner =
+                cosim::scene_keys::unknown_key(&inner).unwrap_or_else(|| inner.trim().into());
+            format!("{}: key `{}`: {inner}", path.display(), e.path())
         })?;
     let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     Ok((study, base))

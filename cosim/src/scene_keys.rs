@@ -35,10 +35,15 @@ pub fn serde_message(prefix: &str, path: &serde_path_to_error::Path, msg: &str) 
     format!("{full}: {msg}")
 }
 
-/// serde's "unknown field `foo`, expected one of `a`, `b`" (first line) as "unknown key
-/// `foo` (expected one of `a`, `b`)", with a guess at the key meant ([`did_you_mean`]);
-/// `None` for any other message.
+/// serde's "unknown field `foo`, expected one of `a`, `b`" as "unknown key `foo` (expected
+/// one of `a`, `b`)", with a guess at the key meant ([`did_you_mean`]); `None` for any
+/// other message. The first line of `msg` that is such a message counts (toml puts an
+/// excerpt of the file before it, or the key after it).
 pub fn unknown_key(msg: &str) -> Option<String> {
+    msg.lines().find_map(|l| unknown_field_line(l.trim_end()))
+}
+
+fn unknown_field_line(msg: &str) -> Option<String> {
     let (word, rest) = msg.strip_prefix("unknown field `")?.split_once('`')?;
     let expected = rest.strip_prefix(", expected ");
     let hint = expected.map_or_else(String::new, |e| {
