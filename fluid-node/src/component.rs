@@ -128,6 +128,102 @@ impl FluidComponent {
         self.tuner = Some(tuner);
     }
 
+    /// [`Component::configure`] for `fluid.method = "spm"`: the spectral solver, the
+    /// smoothed profiles and walls, the binary fluid if any; the time-step limits, effects,
+    /// derived values and notes the node reports.
+    fn configure_spm(&mut self, scene_toml: &str) -> Result<Configured, ComponentError> {
+        let cfg = parse_scene(scene_toml).map_err(ComponentError)?;
+        let mut limits = stability::check(&cfg).map_err(ComponentError)?;
+        let grid = Grid::new(cfg.dimensions, cfg.grid);
+        self.start_tuner(grid.rows(), grid.nx);
+        let nu = cfg.kinematic_viscosity();
+        let accel = cfg.body_force.map(|f| f / cfg.density);
+        let mut ns = SpectralNs::new(grid, nu, cfg.dt, accel);
+        let walls = cfg
+            .walls
+            .as_ref()
+            .map(|w| Walls::new(grid.ny, w, cfg.xi, cfg.xi_cutoff));
+        if cfg.initial_velocity == InitialVelocity::Couette {
+            if let Some(w) = &walls {
+                ns.set_velocity(|_, y, _| [w.couette_start(y), 0.0, 0.0]);
+            }
+        }
+        let radii: Vec<f64> = cfg
+            .fibres
+            .iter()
+            .flat_map(|f| std::iter::repeat_n(f.bead_radius, f.beads))
+            .collect();
+        let spm = Spm::new(grid, cfg.density, cfg.xi, cfg.xi_cutoff, &radii, walls);
+        let binary = match &cfg.binary {
+            None => None,
+            Some(b) => {
+                let psi0: Vec<f64> = cfg
+                    .fibres
+                    .iter()
+                    .flat_map(|f| std::iter::repeat_n(f.affinity, f.beads))
+                    .collect();
+                let fluid = BinaryFluid::new(grid, b, &psi0, cfg.walls.is_some())
+                    .map_err(ComponentError)?;
+                limits.extend(
+                    fluid
+                        .check_time_step(stability::initial_speed(&cfg), cfg.density, cfg.viscosity)
+                        .map_err(ComponentError)?,
+                );
+                ns.enable_force_density();
+                Some(fluid)
+            }
+        };
+
+        let mut active = Vec::new();
+        if !cfg.fibres.is_empty() {
+            active.push(effects::HYDRODYNAMICS.to_string());
+        }
+        if cfg.walls.is_some() {
+            active.push(effects::WALLS.to_string());
+        }
+        if binary.is_some() {
+            active.push(effects::CAPILLARITY.to_string());
+        }
+
+        let mut derived = spm_derived_values(&cfg, grid, spm.walls());
+        if let Some(b) = &cfg.binary {
+            derived.extend(crate::binary_fluid::derived::numbers(&cfg, b, grid));
+        }
+
+        let mut notes = cfg
+            .binary
+            .as_ref()
+            .map_or_else(Vec::new, crate::binary_fluid::derived::notes);
+        notes.extend(cosim::profile::truncation_note(cfg.xi, cfg.xi_cutoff));
+        let total_beads = radii.len();
+        let start = spm_start_check(grid, &spm, &cfg, radii);
+        let configured = Configured {
+            beads_per_fibre: Vec::new(),
+            effects: active,
+            time_step_limits: limits
+                .iter()
+                .map(|l| (l.name.to_string(), l.dt_max))
+                .collect(),
+            derived,
+            notes,
+        };
+        self.run = Some(Run {
+            profile: vec![0.0; grid.ny],
+            cfg,
+            ns,
+            spm,
+            total_beads,
+            pending: None,
+            states: Vec::with_capacity(total_beads),
+            states_step: None,
+            impulses: vec![BeadImpulse::default(); total_beads],
+            binary,
+            psi_step: None,
+            start: Some(start),
+        });
+        Ok(configured)
+    }
+
     /// [`Component::run_phase`] without the timing the grain tuner uses.
     fn run_phase_untimed(
         &mut self,
@@ -423,6 +519,25 @@ impl Run {
     }
 }
 
+/// The check of the first bead states in the periodic box, with the walls' faces where the
+/// scene has walls.
+fn spm_start_check(grid: Grid, spm: &Spm, cfg: &FluidConfig, radii: Vec<f64>) -> StartCheck {
+    StartCheck {
+        geometry: StartBox {
+            dims: grid.dims,
+            size: [grid.nx as f64, grid.ny as f64, grid.nz as f64],
+            periodic: [true, true, grid.dims == 3],
+            walls: spm.walls().map(|w| WallFaces {
+                bottom: w.faces[0],
+                top: w.faces[1],
+                wrap_y: true,
+            }),
+        },
+        beads_per_fibre: cfg.fibres.iter().map(|f| f.beads).collect(),
+        radius: radii,
+    }
+}
+
 /// The numbers an SPM scene reports when configured ("derived" in the summary): the
 /// kinematic viscosity, the profile's diffusion number nu dt / xi^2, the beads' volume
 /// fraction, and between walls the gap, the shear rate, Re on fibre 0's length (else the
@@ -648,109 +763,7 @@ impl Component for FluidComponent {
             self.fpd = Some(run);
             return Ok(configured);
         }
-        let cfg = parse_scene(scene_toml).map_err(ComponentError)?;
-        let mut limits = stability::check(&cfg).map_err(ComponentError)?;
-        let grid = Grid::new(cfg.dimensions, cfg.grid);
-        self.start_tuner(grid.rows(), grid.nx);
-        let nu = cfg.kinematic_viscosity();
-        let accel = cfg.body_force.map(|f| f / cfg.density);
-        let mut ns = SpectralNs::new(grid, nu, cfg.dt, accel);
-        let walls = cfg
-            .walls
-            .as_ref()
-            .map(|w| Walls::new(grid.ny, w, cfg.xi, cfg.xi_cutoff));
-        if cfg.initial_velocity == InitialVelocity::Couette {
-            if let Some(w) = &walls {
-                ns.set_velocity(|_, y, _| [w.couette_start(y), 0.0, 0.0]);
-            }
-        }
-        let radii: Vec<f64> = cfg
-            .fibres
-            .iter()
-            .flat_map(|f| std::iter::repeat_n(f.bead_radius, f.beads))
-            .collect();
-        let spm = Spm::new(grid, cfg.density, cfg.xi, cfg.xi_cutoff, &radii, walls);
-        let binary = match &cfg.binary {
-            None => None,
-            Some(b) => {
-                let psi0: Vec<f64> = cfg
-                    .fibres
-                    .iter()
-                    .flat_map(|f| std::iter::repeat_n(f.affinity, f.beads))
-                    .collect();
-                let fluid = BinaryFluid::new(grid, b, &psi0, cfg.walls.is_some())
-                    .map_err(ComponentError)?;
-                limits.extend(
-                    fluid
-                        .check_time_step(stability::initial_speed(&cfg), cfg.density, cfg.viscosity)
-                        .map_err(ComponentError)?,
-                );
-                ns.enable_force_density();
-                Some(fluid)
-            }
-        };
-
-        let mut active = Vec::new();
-        if !cfg.fibres.is_empty() {
-            active.push(effects::HYDRODYNAMICS.to_string());
-        }
-        if cfg.walls.is_some() {
-            active.push(effects::WALLS.to_string());
-        }
-        if binary.is_some() {
-            active.push(effects::CAPILLARITY.to_string());
-        }
-
-        let mut derived = spm_derived_values(&cfg, grid, spm.walls());
-        if let Some(b) = &cfg.binary {
-            derived.extend(crate::binary_fluid::derived::numbers(&cfg, b, grid));
-        }
-
-        let mut notes = cfg
-            .binary
-            .as_ref()
-            .map_or_else(Vec::new, crate::binary_fluid::derived::notes);
-        notes.extend(cosim::profile::truncation_note(cfg.xi, cfg.xi_cutoff));
-        let total_beads = radii.len();
-        let start = StartCheck {
-            geometry: StartBox {
-                dims: grid.dims,
-                size: [grid.nx as f64, grid.ny as f64, grid.nz as f64],
-                periodic: [true, true, grid.dims == 3],
-                walls: spm.walls().map(|w| WallFaces {
-                    bottom: w.faces[0],
-                    top: w.faces[1],
-                    wrap_y: true,
-                }),
-            },
-            beads_per_fibre: cfg.fibres.iter().map(|f| f.beads).collect(),
-            radius: radii,
-        };
-        let configured = Configured {
-            beads_per_fibre: Vec::new(),
-            effects: active,
-            time_step_limits: limits
-                .iter()
-                .map(|l| (l.name.to_string(), l.dt_max))
-                .collect(),
-            derived,
-            notes,
-        };
-        self.run = Some(Run {
-            profile: vec![0.0; grid.ny],
-            cfg,
-            ns,
-            spm,
-            total_beads,
-            pending: None,
-            states: Vec::with_capacity(total_beads),
-            states_step: None,
-            impulses: vec![BeadImpulse::default(); total_beads],
-            binary,
-            psi_step: None,
-            start: Some(start),
-        });
-        Ok(configured)
+        self.configure_spm(scene_toml)
     }
 
     fn run_phase(
