@@ -397,8 +397,8 @@ fn tumbling_period(ctx: &Context) -> Result<Metric, String> {
                 gamma * period,
                 stokes::period_gamma(b),
                 "2D Stokes flow past the same rigid chain of touching discs, \
-                     unbounded, sharp surfaces (boundary integral solution, \
-                     coordinator/src/reference/stokes_chain_2d.rs)",
+                 unbounded, sharp surfaces (boundary integral solution, \
+                 coordinator/src/reference/stokes_chain_2d.rs)",
             );
             m.extra.insert("harris_pittman".into(), harris_pittman);
             m
@@ -408,8 +408,8 @@ fn tumbling_period(ctx: &Context) -> Result<Metric, String> {
                 gamma * period,
                 crate::reference::stokes_chain_3d::period_gamma(b),
                 "3D Stokes flow past the same rigid chain of touching spheres, \
-                     unbounded, tumbling in the shear plane (rigid multiblob \
-                     solution, coordinator/src/reference/stokes_chain_3d.rs)",
+                 unbounded, tumbling in the shear plane (rigid multiblob \
+                 solution, coordinator/src/reference/stokes_chain_3d.rs)",
             );
             m.extra.insert("harris_pittman".into(), harris_pittman);
             m
@@ -418,7 +418,7 @@ fn tumbling_period(ctx: &Context) -> Result<Metric, String> {
             gamma * period,
             harris_pittman,
             "Jeffery, gamma T = 2 pi (e + 1/e) with the equivalent ellipse e = 1.14 \
-                 N_b^0.844 of Harris & Pittman (L2020 appendix B)",
+             N_b^0.844 of Harris & Pittman (L2020 appendix B)",
         ),
     };
     m.extra.insert(

@@ -61,7 +61,8 @@ fn unknown_field_line(msg: &str) -> Option<String> {
 /// the shortest candidate the word begins (a word of four letters or more, such as
 /// `tumbling_period` for `tumbling_period_gamma`). The first of equally good ones.
 pub fn did_you_mean<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> String {
-    let allowed = (word.chars().count() / 3).max(1);
+    let letters = word.chars().count();
+    let allowed = (letters / 3).max(1);
     let mut closest: Option<(usize, &str)> = None;
     let mut completion: Option<&str> = None;
     for c in candidates {
@@ -69,10 +70,7 @@ pub fn did_you_mean<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str
         if d <= allowed && closest.is_none_or(|(b, _)| d < b) {
             closest = Some((d, c));
         }
-        if word.chars().count() >= 4
-            && c.starts_with(word)
-            && completion.is_none_or(|b| c.len() < b.len())
-        {
+        if letters >= 4 && c.starts_with(word) && completion.is_none_or(|b| c.len() < b.len()) {
             completion = Some(c);
         }
     }
@@ -336,7 +334,7 @@ mod tests {
         assert_eq!(did_you_mean("foo", KEYS), "");
         assert_eq!(did_you_mean("colour", KEYS), "");
         assert_eq!(did_you_mean("x", KEYS), "");
-        // Too short to complete: `tim` is one edit from `time`, `tu` is nothing.
+        // `tu` begins `tumbling_period_gamma` but is too short to be completed.
         assert_eq!(did_you_mean("tu", KEYS), "");
     }
 
