@@ -8,6 +8,7 @@
 //! scene = "../../configs/cantilever.toml"  # relative to the study file
 //! metric = "tip_deflection_over_length"
 //! output = "."                             # relative to the study file
+//! processes = false                        # true: each variant as three processes
 //! [set]                                    # overrides applied to every variant
 //! "time.steps" = 40000
 //! [[vary]]                                 # variants: the product over all [[vary]]
@@ -18,7 +19,13 @@
 //! order = 1.0                              # assumed order of convergence (default 1)
 //! [curve]                                  # optional: the metric against a derived number
 //! x = "fluid.particle_shear_reynolds"      # a key of the summary's `derived` values
+//! [diagram]                                # optional: a regime map (S2023 Fig. 10a)
+//! x = "fibre.0.bending_number"             # derived values, as for [curve]; log_x, log_y
+//! y = "fluid.confinement"
 //! ```
+//!
+//! With `[diagram]` the study draws `NAME_diagram.png`: every variant at (x, y), coloured by
+//! the label of a classifying metric (`orbit`: jeffery, s-turn, s-coiled, stuck; `wrap`).
 //!
 //! With `[curve]` the study also draws `NAME_curve.png`, the metric against `x` with its
 //! reference, and the table gets a column for `x`: for sweeps over a physical parameter,
