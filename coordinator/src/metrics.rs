@@ -391,30 +391,28 @@ fn tumbling_period(ctx: &Context) -> Result<Metric, String> {
         .first()
         .ok_or("the scene has no fibre")?;
     let harris_pittman = crate::reference::jeffery::chain_period_gamma(n);
-    let mut m = match (stokes_2d_chain(ctx, n), stokes_3d_chain(ctx, n)) {
-        (Some(b), _) => {
-            let mut m = Metric::with_reference(
-                gamma * period,
-                stokes::period_gamma(b),
-                "2D Stokes flow past the same rigid chain of touching discs, \
-                 unbounded, sharp surfaces (boundary integral solution, \
-                 coordinator/src/reference/stokes_chain_2d.rs)",
-            );
+    let stokes_chain = match (stokes_2d_chain(ctx, n), stokes_3d_chain(ctx, n)) {
+        (Some(b), _) => Some((
+            stokes::period_gamma(b),
+            "2D Stokes flow past the same rigid chain of touching discs, \
+             unbounded, sharp surfaces (boundary integral solution, \
+             coordinator/src/reference/stokes_chain_2d.rs)",
+        )),
+        (None, Some(b)) => Some((
+            crate::reference::stokes_chain_3d::period_gamma(b),
+            "3D Stokes flow past the same rigid chain of touching spheres, \
+             unbounded, tumbling in the shear plane (rigid multiblob \
+             solution, coordinator/src/reference/stokes_chain_3d.rs)",
+        )),
+        (None, None) => None,
+    };
+    let mut m = match stokes_chain {
+        Some((reference, source)) => {
+            let mut m = Metric::with_reference(gamma * period, reference, source);
             m.extra.insert("harris_pittman".into(), harris_pittman);
             m
         }
-        (None, Some(b)) => {
-            let mut m = Metric::with_reference(
-                gamma * period,
-                crate::reference::stokes_chain_3d::period_gamma(b),
-                "3D Stokes flow past the same rigid chain of touching spheres, \
-                 unbounded, tumbling in the shear plane (rigid multiblob \
-                 solution, coordinator/src/reference/stokes_chain_3d.rs)",
-            );
-            m.extra.insert("harris_pittman".into(), harris_pittman);
-            m
-        }
-        (None, None) => Metric::with_reference(
+        None => Metric::with_reference(
             gamma * period,
             harris_pittman,
             "Jeffery, gamma T = 2 pi (e + 1/e) with the equivalent ellipse e = 1.14 \

@@ -330,18 +330,12 @@ impl Batches {
 /// A node that fails without saying where failed somewhere in the batch of `count` steps
 /// from `step`; the error counts `step` as the steps known to be done.
 fn batch_failed(name: &str, (step, count): (u64, u64), e: LinkFailure) -> (RunError, u64) {
-    if count == 1 {
-        (node_failed(name, step, "", e), step)
+    let later = if count == 1 {
+        String::new()
     } else {
-        let last = step + count - 1;
-        let e = node_failed(
-            name,
-            step,
-            &format!("or later, up to {last} (one batch), "),
-            e,
-        );
-        (e, step)
-    }
+        format!("or later, up to {} (one batch), ", step + count - 1)
+    };
+    (node_failed(name, step, &later, e), step)
 }
 
 #[cfg(test)]
