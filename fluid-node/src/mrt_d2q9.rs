@@ -238,8 +238,8 @@ impl RowStats {
 
     /// [`RowStats::add`] for the nodes of a block, given u_x and |u|^2 of each: the same
     /// sum and the same maximum. The sum runs in node order; the maximum, which does not
-    /// depend on the order (|u|^2 is never -0), in four lanes that vectorise, with a NaN
-    /// anywhere kept as NaN.
+    /// depend on the order (|u|^2 is never -0), in four independent lanes, so that no
+    /// comparison waits on the one before; a NaN anywhere makes it NaN.
     #[inline(always)]
     fn add_block(&mut self, ux: &[f64], u2: &[f64]) {
         for v in ux {
@@ -350,8 +350,8 @@ fn step_row(
     // its vectorisation and half its throughput. Keep the collision loop free of anything
     // carried from node to node, and re-run `cargo bench -p fluid-node --bench lbm_step`
     // after changing it (figures in docs/performance.md).
-    // The pass itself goes by blocks: the velocities of a block first (node by node,
-    // vectorised), then their in-order sum and their maximum.
+    // The pass itself goes by blocks: the velocities of a block first (node by node, a loop
+    // that vectorises), then their in-order sum and their maximum ([`RowStats::add_block`]).
     let mut ux = [0.0; STATS_BLOCK];
     let mut u2 = [0.0; STATS_BLOCK];
     for start in (0..m).step_by(STATS_BLOCK) {
@@ -945,8 +945,8 @@ mod tests {
     }
 
     /// A block of nodes adds to the statistics what they add one by one: the same bits of
-    /// the sum and of the maximum, for blocks of every length up to two vectors past a
-    /// multiple of four, and NaN wherever a NaN is (in the block or already in the row).
+    /// the sum and of the maximum for blocks of 0 to 13 nodes (whole groups of four and
+    /// every remainder), and NaN wherever a NaN is (in the block or already in the row).
     #[test]
     fn a_block_adds_what_its_nodes_add_one_by_one() {
         let v = |k: usize, s: f64| ((k as f64 + s) * 0.731).sin() * 1e-2;
