@@ -24,8 +24,10 @@
 //! velocity stays the mean over its own profile.
 //!
 //! Order and reproducibility. Every sum runs serially over a bead's box in a fixed order
-//! (rows, then columns) and over beads in index order; the only parallel loop is the
-//! node-wise viscosity update of the solver. Results are therefore bitwise the same for any
+//! (rows, then columns), and sums over beads run in index order. The parallel loops are the
+//! node-wise viscosity update of the solver and, where the boxes are large enough
+//! (`PARALLEL_BOX_NODES`), the profiles and velocities of the beads, a bead to a task,
+//! each computed as it would be serially. Results are therefore bitwise the same for any
 //! number of threads.
 //!
 //! Plan once, call every step: [`FpdCoupling::new`] validates an [`FpdConfig`] against the
@@ -41,6 +43,13 @@ pub mod profile;
 
 use crate::mrt_d2q9::{check_viscosity, MrtD2q9};
 use profile::{max_extent, BeadBox};
+use rayon::prelude::*;
+
+/// Box nodes of all beads together (at their largest) from which the beads' profiles and
+/// velocities are computed in parallel, a bead to a task: below, a bead's box is a few
+/// microseconds of work, about what handing it to another thread costs (S2023's d = 4:
+/// 1000 nodes for ten beads; d = 8: 3600).
+const PARALLEL_BOX_NODES: usize = 2048;
 
 /// Parameters of the coupling, all in lattice units. [`FpdConfig::new`] gives the defaults
 /// for the fields not named.
@@ -328,14 +337,16 @@ impl FpdCoupling {
             }
         }
         let (a, xi, reach) = (self.cfg.radius, self.cfg.xi(), self.cfg.reach());
-        for (b, p) in self.beads.iter_mut().zip(positions) {
-            let x = wrap(p[0], self.nx);
-            let y = if self.periodic_y {
-                wrap(p[1], self.ny)
-            } else {
-                p[1]
-            };
-            b.place([x, y], a, xi, reach, self.nx, self.ny, self.periodic_y);
+        let (ny, periodic_y) = (self.ny, self.periodic_y);
+        let place = |(b, p): (&mut BeadBox, &[f64; 2])| {
+            let x = wrap(p[0], nx);
+            let y = if periodic_y { wrap(p[1], ny) } else { p[1] };
+            b.place([x, y], a, xi, reach, nx, ny, periodic_y);
+        };
+        if self.beads_in_parallel() {
+            self.beads.par_iter_mut().zip(positions).for_each(place);
+        } else {
+            self.beads.iter_mut().zip(positions).for_each(place);
         }
         // Sum in bead order, then clamp (module docs: overlap).
         for b in &self.beads {
@@ -423,7 +434,7 @@ impl FpdCoupling {
         if !self.placed {
             return Err(FpdError::NotPlaced);
         }
-        for (b, v) in self.beads.iter().zip(out.iter_mut()) {
+        let velocity = |(b, v): (&BeadBox, &mut [f64; 2])| {
             let (mut sx, mut sy) = (0.0, 0.0);
             b.for_each(|x, y, _, p| {
                 let (_, ux, uy) = lattice.node(x, y);
@@ -431,6 +442,11 @@ impl FpdCoupling {
                 sy += p * uy;
             });
             *v = [sx / b.volume(), sy / b.volume()];
+        };
+        if self.beads_in_parallel() {
+            self.beads.par_iter().zip(out).for_each(velocity);
+        } else {
+            self.beads.iter().zip(out).for_each(velocity);
         }
         Ok(())
     }
@@ -554,6 +570,11 @@ impl FpdCoupling {
             });
         }
         Ok(())
+    }
+
+    /// Whether the beads' boxes are large enough to share out among threads.
+    fn beads_in_parallel(&self) -> bool {
+        self.beads.len() * max_extent(self.cfg.reach()).pow(2) >= PARALLEL_BOX_NODES
     }
 
     fn check_lattice(&self, lattice: &MrtD2q9) -> Result<(), FpdError> {

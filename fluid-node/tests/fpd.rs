@@ -486,18 +486,21 @@ fn internal_flow_of_a_cylinder_in_shear_decreases_with_viscosity_ratio() {
 }
 
 /// Coupled steps give the same bits with 1 and 3 threads: every FPD sum runs in a fixed
-/// order, and the solver's own loops are row-parallel without shared reductions.
+/// order, and the solver's own loops are row-parallel without shared reductions. Beads of
+/// radius 4 have their boxes computed one after the other, beads of radius 8 in parallel.
 #[test]
 fn coupled_steps_do_not_depend_on_threads() {
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(fpd_chain_run)
-    };
-    let (one, three) = (run(1), run(3));
-    assert_eq!(one, three);
+    for a in [4.0, 8.0] {
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| fpd_chain_run(a))
+        };
+        let (one, three) = (run(1), run(3));
+        assert_eq!(one, three, "a = {a}");
+    }
 }
 
 /// The per-step calls (`apply`, `bead_velocities`, `rigid_motion`, `internal_flow`) allocate
@@ -509,28 +512,38 @@ fn per_step_calls_do_not_allocate() {
         .num_threads(1)
         .build()
         .unwrap();
-    pool.install(|| {
-        let mut lat = channel(40, 40, 0.1, 0.0, 0.01);
-        let mut c = FpdCoupling::new(FpdConfig::new(4.0, 0.1), &mut lat, 4).unwrap();
-        let mut pos = [[1.0, 1.0], [9.0, 1.5], [17.0, 2.0], [39.5, 38.0]];
-        let forces = [[1e-4, 2e-4]; 4];
-        let mut v = [[0.0; 2]; 4];
+    // Radius 4: the beads' boxes one after the other; radius 8: in parallel.
+    for a in [4.0, 8.0] {
+        pool.install(|| per_step_calls_allocate_nothing(a));
+    }
+}
+
+/// [`per_step_calls_do_not_allocate`] for beads of radius `a`.
+fn per_step_calls_allocate_nothing(a: f64) {
+    let mut lat = channel(40, 40, 0.1, 0.0, 0.01);
+    let mut c = FpdCoupling::new(FpdConfig::new(a, 0.1), &mut lat, 4).unwrap();
+    let mut pos = [[1.0, 1.0], [9.0, 1.5], [17.0, 2.0], [39.5, 38.0]];
+    let forces = [[1e-4, 2e-4]; 4];
+    let mut v = [[0.0; 2]; 4];
+    c.apply(&mut lat, &pos, &forces).unwrap();
+    let before = ALLOCATIONS.with(|n| n.get());
+    for step in 0..50 {
         c.apply(&mut lat, &pos, &forces).unwrap();
-        let before = ALLOCATIONS.with(|a| a.get());
-        for step in 0..50 {
-            c.apply(&mut lat, &pos, &forces).unwrap();
-            lat.step();
-            c.bead_velocities(&lat, &mut v).unwrap();
-            let (w, om) = c.rigid_motion(&lat, step % 4).unwrap();
-            c.internal_flow(&lat, step % 4, w, om).unwrap();
-            for p in pos.iter_mut() {
-                p[0] += 0.37;
-                p[1] = (p[1] + 0.29).min(39.0);
-            }
+        lat.step();
+        c.bead_velocities(&lat, &mut v).unwrap();
+        let (w, om) = c.rigid_motion(&lat, step % 4).unwrap();
+        c.internal_flow(&lat, step % 4, w, om).unwrap();
+        for p in pos.iter_mut() {
+            p[0] += 0.37;
+            p[1] = (p[1] + 0.29).min(39.0);
         }
-        let after = ALLOCATIONS.with(|a| a.get());
-        assert_eq!(after - before, 0, "allocations in per-step calls");
-    });
+    }
+    let after = ALLOCATIONS.with(|n| n.get());
+    assert_eq!(
+        after - before,
+        0,
+        "allocations in per-step calls, radius {a}"
+    );
 }
 
 /// After the first full write, `update_viscosity` touches only the previous and new boxes;

@@ -31,9 +31,9 @@ fn results_do_not_depend_on_the_grain() {
         assert_eq!(coarse.len(), fine.len());
         assert!(coarse == fine, "SPM: the grain changed the bits");
         set_grain(GRAIN);
-        let coarse = fpd_chain_run();
+        let coarse = fpd_chain_run(4.0);
         set_grain(64);
-        let fine = fpd_chain_run();
+        let fine = fpd_chain_run(4.0);
         assert_eq!(coarse, fine, "FPD: the grain changed the bits");
     });
 }

@@ -109,9 +109,11 @@ pub fn run(c: &mut FluidComponent, x: &mut InProcessExchange, from: u64, steps: 
     bits
 }
 
-/// 30 coupled FPD steps of a 3-bead chain, moved by the velocities the lattice gives it, in a
-/// 64 x 640 channel between walls at -+0.01 (nu 0.1): the final positions and velocities.
-pub fn fpd_chain_run() -> ([[f64; 2]; 3], [[f64; 2]; 3]) {
+/// 30 coupled FPD steps of a 3-bead chain of touching beads of radius `a`, moved by the
+/// velocities the lattice gives it, in a 64 x 640 channel between walls at -+0.01 (nu 0.1):
+/// the final positions and velocities. At a = 4 the beads' boxes are computed one after the
+/// other, at a = 8 in parallel (`fpd::PARALLEL_BOX_NODES`).
+pub fn fpd_chain_run(a: f64) -> ([[f64; 2]; 3], [[f64; 2]; 3]) {
     use fluid_node::fpd::{FpdConfig, FpdCoupling};
     use fluid_node::mrt_d2q9::{MrtConfig, MrtD2q9, YBoundary};
     let walls = YBoundary::Walls {
@@ -119,8 +121,12 @@ pub fn fpd_chain_run() -> ([[f64; 2]; 3], [[f64; 2]; 3]) {
         top: 0.01,
     };
     let mut lat = MrtD2q9::new(MrtConfig::new(64, 640, walls, 0.1)).unwrap();
-    let mut c = FpdCoupling::new(FpdConfig::new(4.0, 0.1), &mut lat, 3).unwrap();
-    let mut pos = [[10.0, 100.0], [18.0, 100.5], [26.0, 101.0]];
+    let mut c = FpdCoupling::new(FpdConfig::new(a, 0.1), &mut lat, 3).unwrap();
+    let mut pos = [
+        [10.0, 100.0],
+        [10.0 + 2.0 * a, 100.5],
+        [10.0 + 4.0 * a, 101.0],
+    ];
     let forces = [[1e-4, 0.0], [0.0, 0.0], [-1e-4, 0.0]];
     let mut v = [[0.0; 2]; 3];
     for _ in 0..30 {
