@@ -239,6 +239,22 @@ fn fluid_keys_are_checked_by_the_fluid_node() {
     );
 }
 
+/// A profile cut-off far beyond the grid is refused, promptly: it once made the fibre node's
+/// profile integrals overflow, and its stiffness check then iterated on NaN for minutes.
+#[test]
+fn a_huge_profile_cut_off_is_refused() {
+    let scene = config("spm/tumbling.toml");
+    expect_error(
+        &[
+            "check",
+            scene.to_str().unwrap(),
+            "--set",
+            "fluid.xi_cutoff=1e300",
+        ],
+        &["fluid.xi_cutoff"],
+    );
+}
+
 /// A metric that cannot be computed (here: a tumbling period from a run too short to pass
 /// the vertical twice) does not fail the finished run: the run completes, exits 0, keeps the
 /// other metrics, and names the missing one with the reason in the output and in the

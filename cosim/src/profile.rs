@@ -61,6 +61,10 @@ pub fn truncation_note(xi: f64, cutoff: f64) -> Option<String> {
     })
 }
 
+/// Distance from the surface, in units of `xi`, beyond which [`interface`] is exactly 0 or 1
+/// in double precision (`tanh(x)` rounds to 1 for `x > 19.1`, and `28 / sqrt 2 = 19.8`).
+pub const SATURATED_OVER_XI: f64 = 28.0;
+
 /// `∫ w(r) phi(r)` over the plane (`dims = 2`, per unit depth) or space (`dims = 3`) for a
 /// radial weight `w`: the sharp core analytically (`core`), the interface shell
 /// `[r_b - xi_c, r_b + xi_c]` by Simpson quadrature along the radius.
@@ -72,7 +76,11 @@ fn radial_integral(
     core: impl Fn(f64) -> f64,
     weight: impl Fn(f64) -> f64,
 ) -> f64 {
-    let (a, b) = ((radius - cutoff).max(0.0), radius + cutoff);
+    // Beyond SATURATED_OVER_XI xi the profile is exactly 0 or 1 in double precision, so a
+    // longer cut-off changes nothing but the quadrature's step (and a huge one would make it
+    // miss the interface and overflow the weights).
+    let reach = cutoff.min(SATURATED_OVER_XI * xi);
+    let (a, b) = ((radius - reach).max(0.0), radius + reach);
     let n = 20_000;
     let h = (b - a) / n as f64;
     let f = |r: f64| {
@@ -148,6 +156,29 @@ mod tests {
         assert_eq!(interface(-3.01, 1.0, 3.0), 0.0);
         // The jump at the cut-off (L2020's xi_c = 3 xi): 1 - phi(3 xi) = 1.4 %.
         assert!((1.0 - interface(3.0, 1.0, 3.0) - 0.014166).abs() < 1e-6);
+    }
+
+    /// The profile is exactly 0 and 1 from SATURATED_OVER_XI xi on, so any longer cut-off
+    /// gives the same integrals; a huge one gives finite ones (it overflowed the weights).
+    #[test]
+    fn cut_offs_past_the_saturated_profile_change_nothing() {
+        for xi in [0.5, 1.0, 2.0] {
+            let s = SATURATED_OVER_XI * xi;
+            assert_eq!(interface(s, xi, f64::INFINITY), 1.0);
+            assert_eq!(interface(-s, xi, f64::INFINITY), 0.0);
+            for dims in [2, 3] {
+                let at = |c: f64| {
+                    (
+                        profile_volume(6.0, xi, c, dims),
+                        profile_moment(6.0, xi, c, dims),
+                    )
+                };
+                let (v, m) = at(s);
+                assert!(v.is_finite() && m.is_finite());
+                assert_eq!(at(2.0 * s), (v, m), "xi {xi}, {dims}D");
+                assert_eq!(at(1e300), (v, m), "xi {xi}, {dims}D");
+            }
+        }
     }
 
     /// The analytic volumes of the module docs, against quadrature without truncation.

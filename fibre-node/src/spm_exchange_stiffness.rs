@@ -517,6 +517,11 @@ fn bisect(
 /// Spectral radius of a real square matrix (its Schur form; power iteration should that not
 /// converge).
 fn spectral_radius_of(b: DMatrix<f64>) -> f64 {
+    // A NaN or infinite entry would keep the QR iteration going to its limit, call after
+    // call; such a step is unbounded anyway.
+    if b.iter().any(|v| !v.is_finite()) {
+        return f64::INFINITY;
+    }
     if let Some(schur) = nalgebra::linalg::Schur::try_new(b.clone(), 1e-14, 20_000) {
         return schur
             .complex_eigenvalues()
