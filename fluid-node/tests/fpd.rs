@@ -92,6 +92,12 @@ fn bad_input_is_refused() {
         matches!(e, FpdError::LatticeTooSmall { extent: 19, .. }),
         "{e}"
     );
+    // A box too wide to count (its extent once wrapped round to zero, passed, and the run
+    // then ran out of memory) is refused as well.
+    let mut huge = FpdConfig::new(4.0, 0.1);
+    huge.interface_ratio = 1e300;
+    let e = FpdCoupling::new(huge, &mut small, 1).unwrap_err();
+    assert!(matches!(e, FpdError::LatticeTooSmall { .. }), "{e}");
     // Between walls the box is clipped instead: 16 rows are enough.
     let mut ch = channel(32, 16, 0.1, 0.0, 0.0);
     let mut c = FpdCoupling::new(FpdConfig::new(4.0, 0.1), &mut ch, 2).unwrap();

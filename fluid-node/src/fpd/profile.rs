@@ -41,7 +41,8 @@ pub struct BeadBox {
 
 /// Largest number of box nodes along one axis for a reach (half-width) `reach`.
 pub fn max_extent(reach: f64) -> usize {
-    (2.0 * reach).floor() as usize + 1
+    // Saturating: a reach too large to count must stay larger than any lattice.
+    ((2.0 * reach).floor() as usize).saturating_add(1)
 }
 
 impl BeadBox {
