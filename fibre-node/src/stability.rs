@@ -46,7 +46,10 @@ pub struct StabilityLimit {
 
 /// `h_max` for symplectic Euler with mass-proportional damping.
 pub fn stable_step(omega_max: f64, damping: f64) -> f64 {
-    if omega_max <= 0.0 {
+    if !omega_max.is_finite() {
+        // Infinitely stiff (or overflowed): no step is stable.
+        0.0
+    } else if omega_max <= 0.0 {
         if damping > 0.0 {
             2.0 / damping
         } else {
@@ -187,6 +190,11 @@ pub fn max_eigenvalue(fibre: &Fibre, iterations: usize) -> (f64, usize) {
             y[k] = fp[k] / na;
         }
     }
+    if !lambda.is_finite() {
+        // Stiffnesses so large that the forces overflow: no step is stable (a NaN would
+        // otherwise read as a fibre with no stiffness at all).
+        return (f64::INFINITY, n);
+    }
     (lambda.max(0.0), n)
 }
 
@@ -266,7 +274,11 @@ pub fn stability_limit(fibre: &Fibre, substeps: usize) -> StabilityLimit {
     let omega_max = lambda.sqrt();
     // Kelvin-Voigt damping acts on a mode of frequency omega as a rate tau omega^2; the
     // limit falls with omega, so the fastest mode binds.
-    let damping = fibre.damping + fibre.internal_damping * omega_max * omega_max;
+    let damping = if fibre.internal_damping == 0.0 {
+        fibre.damping // not 0 x inf for an overflowed omega_max
+    } else {
+        fibre.damping + fibre.internal_damping * omega_max * omega_max
+    };
     let step_limit = stable_step(omega_max, damping);
     StabilityLimit {
         name: "beam stiffness",
@@ -378,6 +390,31 @@ mod tests {
         let asym = (&a - &sym).abs().max() / a.abs().max();
         assert!(asym < 1e-6, "K not symmetric: {asym:e} {}", dofs.len());
         sym.symmetric_eigenvalues().max()
+    }
+
+    /// A stiffness whose forces overflow reads as infinitely stiff, with no stable step,
+    /// not (through a NaN) as no stiffness at all.
+    #[test]
+    fn overflowing_stiffness_has_no_stable_step() {
+        for model in ["cohesive-beam", "bead-spring"] {
+            let s = parse_scene(&format!(
+                "dimensions = 3\n[time]\ndt = 1\n[[fibre]]\nmodel = \"{model}\"\nbeads = 5\nbead_radius = 1.2\nyoungs_modulus = 1e300\n"
+            ))
+            .unwrap();
+            let f = Fibre::straight(&s.fibres[0], s.dimensions, s.has_fluid);
+            assert_eq!(
+                max_eigenvalue(&f, POWER_ITERATIONS).0,
+                f64::INFINITY,
+                "{model}"
+            );
+            let l = stability_limit(&f, 1);
+            assert_eq!(
+                (l.omega_max, l.step_limit, l.dt_limit),
+                (f64::INFINITY, 0.0, 0.0)
+            );
+            assert_eq!(l.damping, f.damping);
+        }
+        assert_eq!(stable_step(f64::NAN, 0.0), 0.0);
     }
 
     #[test]
