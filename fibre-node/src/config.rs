@@ -781,6 +781,7 @@ youngs_modulus = 1.0
             ("direction = [1, 0, 1]", "fibre.0.direction: a 2D scene"),
             ("direction = [1, 0]", "fibre.0.direction"),
             ("start = [0, 0, 1]", "fibre.0.start: a 2D scene"),
+            ("start = [1e300, 0, 0]", "fibre.0.start: [1e300, 0.0, 0.0] lies so far out"),
             ("density = nan", "fibre.0.density: expected a positive number, got NaN"),
             ("shear_modulus = inf", "fibre.0.shear_modulus: expected a positive number, got inf"),
             ("loads = [{ bead = 10 }]", "fibre.0.loads.0.bead: bead index 10 is out of range"),

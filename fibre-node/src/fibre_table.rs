@@ -145,6 +145,7 @@ pub(crate) fn validate_fibre(
     let density = optional(p, "density", raw.density, positive)?.unwrap_or(1.0);
     let (start, direction) = placement(p, &raw, dims)?;
     let spacing = optional(p, "spacing", raw.spacing, positive)?.unwrap_or(2.0 * bead_radius);
+    resolvable(p, start, spacing * beads as f64, spacing)?;
     let initial_bend = optional(p, "initial_bend", raw.initial_bend, finite)?.unwrap_or(0.0);
     let clamp = clamped_beads(p, &raw.clamp, beads)?;
     let loads = raw
@@ -254,6 +255,20 @@ fn wall_contact(
              walls: a [walls] table and fluid.grid = [nx, ny]; remove the key"
         )),
     }
+}
+
+/// Refuse a fibre placed so far from the origin that double precision cannot hold its bead
+/// spacing (there the beads would fall onto one another): the spacing must be resolved to
+/// one part in a million at `|start| + length`.
+fn resolvable(p: &str, start: [f64; 3], length: f64, spacing: f64) -> Result<(), String> {
+    let far = start.iter().fold(length, |m, x| m.max(x.abs() + length));
+    if far * f64::EPSILON > 1e-6 * spacing {
+        return Err(format!(
+            "{p}.start: {start:?} lies so far out that the bead spacing {spacing} is not \
+             resolved in double precision; place the fibre within the domain"
+        ));
+    }
+    Ok(())
 }
 
 /// The first bead's centre and the fibre's unit direction.
