@@ -1,0 +1,112 @@
+//! Every number of a scene set to an absurd value (huge, negative, NaN) is either accepted or
+//! refused by `coordinator check` with a clear message: no panic, no hang, no exit by signal.
+//! One scene per kind of run (fibre alone, SPM with walls, FPD, binary fluid), every numeric
+//! key of each. Two such values once got through: `fluid.xi_cutoff = 1e300` kept the SPM
+//! stiffness check iterating on NaN for minutes, and `fluid.interface_ratio = 1e300` passed
+//! the FPD lattice check (the box's extent wrapped round to zero) and the run then ran out of
+//! memory.
+mod common;
+use common::*;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Far above any check's own time (the slowest here takes well under a second); only a hang
+/// gets near it.
+const HANG: Duration = Duration::from_secs(120);
+
+/// `(path, value)` for every numeric leaf of `v`: numbers, and arrays of numbers as a whole.
+fn numeric_keys(prefix: &str, v: &toml::Value, out: &mut Vec<(String, String)>) {
+    let absurd_floats = ["1e300", "-1e300", "nan"];
+    match v {
+        toml::Value::Table(t) => {
+            for (k, v) in t {
+                let p = if prefix.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{prefix}.{k}")
+                };
+                numeric_keys(&p, v, out);
+            }
+        }
+        toml::Value::Array(a) if a.iter().all(|x| x.is_table()) => {
+            for (i, v) in a.iter().enumerate() {
+                numeric_keys(&format!("{prefix}.{i}"), v, out);
+            }
+        }
+        toml::Value::Array(a) if !a.is_empty() && a.iter().all(|x| x.is_float()) => {
+            for x in absurd_floats {
+                out.push((prefix.into(), format!("[{}]", vec![x; a.len()].join(","))));
+            }
+        }
+        toml::Value::Float(_) => {
+            out.extend(absurd_floats.map(|x| (prefix.to_string(), x.to_string())));
+        }
+        toml::Value::Integer(_) => {
+            out.extend(["1000000000000", "-1"].map(|x| (prefix.to_string(), x.to_string())));
+        }
+        _ => {}
+    }
+}
+
+#[test]
+fn absurd_numbers_are_accepted_or_refused_cleanly() {
+    let mut failures = Vec::new();
+    let mut checked = 0;
+    for scene in [
+        "cantilever.toml",
+        "spm/tumbling.toml",
+        "fpd/flexible_shear.toml",
+        "capillary/laplace_2d.toml",
+    ] {
+        let path = config(scene);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let mut keys = Vec::new();
+        numeric_keys("", &toml::from_str(&text).unwrap(), &mut keys);
+        assert!(keys.len() > 20, "{scene}: only {} cases", keys.len());
+        for (key, value) in keys {
+            let set = format!("{key}={value}");
+            let mut child = Command::new(bin_dir().join("coordinator"))
+                .args(["check", path.to_str().unwrap(), "--set", &set])
+                .current_dir(root())
+                .stdout(Stdio::null())
+                .stderr(Stdio::piped())
+                .spawn()
+                .expect("start coordinator");
+            let start = Instant::now();
+            let status = loop {
+                if let Some(s) = child.try_wait().unwrap() {
+                    break Some(s);
+                }
+                if start.elapsed() > HANG {
+                    let _ = child.kill();
+                    let _ = child.wait();
+                    break None;
+                }
+                std::thread::sleep(Duration::from_millis(5));
+            };
+            let err = child
+                .wait_with_output()
+                .map(|o| String::from_utf8_lossy(&o.stderr).into_owned())
+                .unwrap_or_default();
+            checked += 1;
+            match status {
+                None => failures.push(format!("{scene} {set}: no answer within {HANG:?}")),
+                Some(s) if s.code() == Some(0) => {}
+                Some(s) if s.code() == Some(2) && err.starts_with("error: ") => {}
+                Some(s) => failures.push(format!(
+                    "{scene} {set}: {s}, {}",
+                    err.lines().last().unwrap_or("")
+                )),
+            }
+            if err.contains("panicked") {
+                failures.push(format!("{scene} {set}: panic: {err}"));
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {checked} checks failed:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
