@@ -23,16 +23,17 @@ use rustfft::{Fft, FftPlanner};
 use std::sync::Arc;
 
 /// Complex values gathered per column block along y and z: the block holds
-/// `max(MIN_BLOCK, BLOCK_VALUES / len)` neighbouring columns of `len` values, so that a
-/// strided axis is read in runs of that many contiguous values while the block stays in
-/// the L2 cache.
+/// `max(MIN_BLOCK, BLOCK_VALUES / len)` neighbouring columns of `len` values, rounded down
+/// to a multiple of `MIN_BLOCK`, so that a strided axis is read in runs of that many
+/// contiguous values while the block stays in the L2 cache.
 pub const BLOCK_VALUES: usize = 1024;
 /// Fewest columns per block.
 pub const MIN_BLOCK: usize = 8;
 
 /// Columns per block for lines of `len` values.
 fn block(len: usize) -> usize {
-    (BLOCK_VALUES / len.max(1)).max(MIN_BLOCK)
+    // A multiple of MIN_BLOCK, so that whole blocks take the fixed-width copies.
+    (BLOCK_VALUES / len.max(1)).max(MIN_BLOCK) / MIN_BLOCK * MIN_BLOCK
 }
 
 /// A raw pointer shared between rayon tasks that touch disjoint elements.
@@ -332,10 +333,13 @@ impl Transform {
         let b = bw.min(c.width - c0);
         let base = o * c.outer_stride + c0;
         let lines = &mut ws.lines[..b * c.len];
+        let group = MIN_BLOCK * c.len;
         // SAFETY: the caller's: these columns are this task's.
         unsafe {
-            if b == MIN_BLOCK {
-                gather::<MIN_BLOCK>(src.0, (base, c.stride), lines);
+            if b.is_multiple_of(MIN_BLOCK) {
+                for (g, part) in lines.chunks_exact_mut(group).enumerate() {
+                    gather::<MIN_BLOCK>(src.0, (base + g * MIN_BLOCK, c.stride), part);
+                }
             } else {
                 gather_any(src.0, (base, c.stride, b), lines);
             }
@@ -343,8 +347,10 @@ impl Transform {
         fft.process_with_scratch(lines, &mut ws.fft_scratch);
         // SAFETY: as for the gather.
         unsafe {
-            if b == MIN_BLOCK {
-                scatter::<MIN_BLOCK>(lines, dst.0, (base, c.stride));
+            if b.is_multiple_of(MIN_BLOCK) {
+                for (g, part) in lines.chunks_exact(group).enumerate() {
+                    scatter::<MIN_BLOCK>(part, dst.0, (base + g * MIN_BLOCK, c.stride));
+                }
             } else {
                 scatter_any(lines, dst.0, (base, c.stride, b));
             }
