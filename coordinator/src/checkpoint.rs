@@ -7,11 +7,14 @@
 //!   of step 0 and the orientation history of fibre 0 (what the metrics need from the part of
 //!   the run already done), and the wall seconds spent from step 0 to the checkpoint over
 //!   all pieces of the run;
-//! - `NODE.state`: each node's `SaveState` answer, as it gave it.
+//! - `NODE.state`: each node's `SaveState` answer, as it gave it; `run.json` records its
+//!   CRC-32 (`state_crc32`), and a resume refuses a state file that does not match, so that a
+//!   damaged file or one from another checkpoint is named instead of resumed.
 //!
-//! Writing replaces the folder's files one by one through temporary names, so that a run
-//! stopped while writing leaves the previous checkpoint's files or the new ones, never a
-//! truncated file.
+//! Writing replaces the folder's files one by one through temporary names, the node states
+//! first and `run.json` last, so that a run stopped while writing leaves the previous
+//! checkpoint's files or the new ones, never a truncated file; a folder left with some new
+//! and some old files fails the checksums.
 use crate::trajectory::Trajectory;
 use cosim::BeadState;
 use serde::{Deserialize, Serialize};
@@ -41,6 +44,10 @@ pub struct RunCheckpoint {
     /// checkpoint (fields `wall_watch`, `self_watch` and `fibre_watch`).
     #[serde(flatten)]
     pub watches: crate::overlap_watch::OverlapWatches,
+    /// CRC-32 (IEEE) of each node's state file, by node name, set by [`write`]; absent in
+    /// checkpoints written before it existed, whose states are then read unchecked.
+    #[serde(default)]
+    pub state_crc32: std::collections::BTreeMap<String, u32>,
 }
 
 fn bits(s: &BeadState) -> [u64; 13] {
@@ -86,6 +93,7 @@ impl RunCheckpoint {
             trajectory: trajectory.clone(),
             wall_seconds,
             watches,
+            state_crc32: Default::default(),
         }
     }
 
@@ -94,18 +102,22 @@ impl RunCheckpoint {
     }
 }
 
-/// Write `run` and the nodes' states into `dir`.
+/// Write `run` and the nodes' states into `dir`, with the states' checksums in `run.json`.
 pub fn write(dir: &Path, run: &RunCheckpoint, nodes: &[(String, Vec<u8>)]) -> Result<(), String> {
     std::fs::create_dir_all(dir)
         .map_err(|e| format!("cannot create the checkpoint folder {}: {e}", dir.display()))?;
-    let json = serde_json::to_vec_pretty(run)
+    let mut run = run.clone();
+    run.state_crc32 = nodes
+        .iter()
+        .map(|(n, s)| (n.clone(), crc32fast::hash(s)))
+        .collect();
+    let json = serde_json::to_vec_pretty(&run)
         .map_err(|e| format!("cannot serialise the checkpoint: {e}"))?;
-    let mut files: Vec<(String, &[u8])> = vec![("run.json".into(), &json)];
-    files.extend(
-        nodes
-            .iter()
-            .map(|(n, s)| (format!("{n}.state"), s.as_slice())),
-    );
+    let mut files: Vec<(String, &[u8])> = nodes
+        .iter()
+        .map(|(n, s)| (format!("{n}.state"), s.as_slice()))
+        .collect();
+    files.push(("run.json".into(), &json));
     for (name, bytes) in files {
         let path = dir.join(&name);
         let tmp = dir.join(format!(".{name}.tmp"));
@@ -138,10 +150,22 @@ pub fn read_run(dir: &Path) -> Result<RunCheckpoint, String> {
     Ok(run)
 }
 
-/// Read node `name`'s saved state from `dir`.
-pub fn read_node(dir: &Path, name: &str) -> Result<Vec<u8>, String> {
+/// Read node `name`'s saved state from `dir`, checked against the CRC-32 `run` recorded.
+pub fn read_node(dir: &Path, run: &RunCheckpoint, name: &str) -> Result<Vec<u8>, String> {
     let path = dir.join(format!("{name}.state"));
-    std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))
+    let state = std::fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    if let Some(&want) = run.state_crc32.get(name) {
+        let got = crc32fast::hash(&state);
+        if got != want {
+            return Err(format!(
+                "{} does not match the checksum run.json recorded for it (CRC-32 {got:08x}, \
+                 recorded {want:08x}): the file is damaged or belongs to another checkpoint; \
+                 resume from an intact checkpoint or start the run again",
+                path.display()
+            ));
+        }
+    }
+    Ok(state)
 }
 
 /// The scene without the keys a resumed run may change: `time.steps`, `[output]` and
@@ -252,6 +276,42 @@ mod tests {
         v.as_object_mut().unwrap().remove("wall_watch");
         let oldest: RunCheckpoint = serde_json::from_value(v).unwrap();
         assert_eq!(oldest.watches, Default::default());
+    }
+
+    /// Each state's checksum travels in run.json: the states read back as written, a
+    /// changed byte or a state from elsewhere is refused, and a checkpoint from before the
+    /// checksums reads unchecked.
+    #[test]
+    fn node_states_are_checked_against_their_checksums() {
+        let dir = std::env::temp_dir().join(format!("ck-crc-{}", std::process::id()));
+        let run = RunCheckpoint::new(
+            2,
+            1.0,
+            "",
+            &[],
+            &Trajectory::default(),
+            None,
+            Default::default(),
+        );
+        let states = vec![
+            ("fluid-node".to_string(), vec![1u8, 2, 3, 4]),
+            ("fibre-node".to_string(), vec![9u8; 40]),
+        ];
+        write(&dir, &run, &states).unwrap();
+        let back = read_run(&dir).unwrap();
+        assert_eq!(back.state_crc32.len(), 2);
+        assert_eq!(read_node(&dir, &back, "fibre-node").unwrap(), vec![9u8; 40]);
+        std::fs::write(dir.join("fluid-node.state"), [1u8, 2, 3, 5]).unwrap();
+        let e = read_node(&dir, &back, "fluid-node").unwrap_err();
+        assert!(
+            e.contains("fluid-node.state does not match the checksum"),
+            "{e}"
+        );
+        assert_eq!(
+            read_node(&dir, &run, "fluid-node").unwrap(),
+            vec![1u8, 2, 3, 5]
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -1197,7 +1197,7 @@ fn resume(
     }
     for n in nodes.iter_mut() {
         let name = n.link.name().to_string();
-        let state = crate::checkpoint::read_node(dir, &name).map_err(fail)?;
+        let state = crate::checkpoint::read_node(dir, &ck, &name).map_err(fail)?;
         n.link
             .call(&Command::RestoreState { state })
             .map_err(|e| fail(format!("resuming node `{name}` at step {}: {e}", ck.step)))?;
