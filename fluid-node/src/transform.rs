@@ -105,7 +105,7 @@ fn all_zero(row: &[f64]) -> bool {
 
 /// Copy the `B` neighbouring columns starting at `base` (`len = lines.len() / B` values each,
 /// `stride` apart) of `src` into `lines`, column `j` at `lines[j * len..]`. `B` fixed, so the
-/// inner copy is unrolled and unchecked: the common block of long columns.
+/// inner copy is unrolled and unchecked: every whole block, in groups of `MIN_BLOCK`.
 ///
 /// # Safety
 /// `src` must hold the `B` columns; no other task writes them meanwhile.
@@ -125,7 +125,7 @@ unsafe fn gather<const B: usize>(
     }
 }
 
-/// [`gather`] of `b` columns, `b` known only at run time (short columns, the last block).
+/// [`gather`] of `b` columns, `b` known only at run time (the narrower last block of a row).
 ///
 /// # Safety
 /// As for [`gather`].
@@ -138,6 +138,7 @@ unsafe fn gather_any(
     for i in 0..len {
         let p = base + i * stride;
         for j in 0..b {
+            // SAFETY: the caller's.
             lines[j * len + i] = unsafe { *src.add(p + j) };
         }
     }
@@ -177,6 +178,7 @@ unsafe fn scatter_any(
     for i in 0..len {
         let p = base + i * stride;
         for j in 0..b {
+            // SAFETY: the caller's.
             unsafe { *dst.add(p + j) = lines[j * len + i] };
         }
     }
