@@ -44,7 +44,7 @@ pub struct RunCheckpoint {
     /// checkpoint (fields `wall_watch`, `self_watch` and `fibre_watch`).
     #[serde(flatten)]
     pub watches: crate::overlap_watch::OverlapWatches,
-    /// CRC-32 (IEEE) of each node's state file, by node name, set by [`write`]; absent in
+    /// CRC-32 (IEEE) of each node's state file, by node name, set by [`write()`]; absent in
     /// checkpoints written before it existed, whose states are then read unchecked.
     #[serde(default)]
     pub state_crc32: std::collections::BTreeMap<String, u32>,
