@@ -103,10 +103,13 @@ impl RunCheckpoint {
 }
 
 /// Write `run` and the nodes' states into `dir`, with the states' checksums in `run.json`.
-pub fn write(dir: &Path, run: &RunCheckpoint, nodes: &[(String, Vec<u8>)]) -> Result<(), String> {
+pub fn write(
+    dir: &Path,
+    mut run: RunCheckpoint,
+    nodes: &[(String, Vec<u8>)],
+) -> Result<(), String> {
     std::fs::create_dir_all(dir)
         .map_err(|e| format!("cannot create the checkpoint folder {}: {e}", dir.display()))?;
-    let mut run = run.clone();
     run.state_crc32 = nodes
         .iter()
         .map(|(n, s)| (n.clone(), crc32fast::hash(s)))
@@ -297,7 +300,7 @@ mod tests {
             ("fluid-node".to_string(), vec![1u8, 2, 3, 4]),
             ("fibre-node".to_string(), vec![9u8; 40]),
         ];
-        write(&dir, &run, &states).unwrap();
+        write(&dir, run.clone(), &states).unwrap();
         let back = read_run(&dir).unwrap();
         assert_eq!(back.state_crc32.len(), 2);
         assert_eq!(read_node(&dir, &back, "fibre-node").unwrap(), vec![9u8; 40]);

@@ -725,7 +725,7 @@ fn drive(
                 st.wall_since_step_0(),
                 st.watches,
             );
-            save_checkpoint(&opts.out.join("checkpoint"), &run, nodes)?;
+            save_checkpoint(&opts.out.join("checkpoint"), run, nodes)?;
         }
         if stop {
             status = "interrupted";
@@ -1159,7 +1159,7 @@ pub(crate) fn node_failed(node: &str, step: u64, context: &str, e: LinkFailure) 
 /// Ask every node for its state and write the checkpoint.
 fn save_checkpoint(
     dir: &Path,
-    run: &crate::checkpoint::RunCheckpoint,
+    run: crate::checkpoint::RunCheckpoint,
     nodes: &mut [Node],
 ) -> Result<(), RunError> {
     let mut saved = Vec::with_capacity(nodes.len());
