@@ -237,20 +237,28 @@ impl SpectralNs {
     }
 
     fn project_state(&mut self) {
+        match self.grid.dims {
+            2 => self.project_modes::<2>(),
+            _ => self.project_modes::<3>(),
+        }
+    }
+
+    /// [`Self::project_state`] for `D` components.
+    fn project_modes<const D: usize>(&mut self) {
         let g = self.grid;
         let w = &self.waves;
-        let d = g.dims;
+        let nxh = g.nxh();
+        let kx = &w.x.k[..nxh];
         let mut fields = slices(&mut self.u_hat);
-        for_each_row(&mut fields[..d], g.nxh(), |r, rows| {
+        for_each_row(&mut fields[..D], nxh, |r, rows| {
+            let rows = components::<D>(rows);
             let (iy, iz) = g.row_yz(r);
-            for ix in 0..g.nxh() {
-                let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]];
-                let mut v = [Complex64::default(); 3];
-                for c in 0..rows.len() {
-                    v[c] = rows[c][ix];
-                }
-                project(&k, &mut v, rows.len());
-                for c in 0..rows.len() {
+            let kyz = [w.y.k[iy], w.z.k[iz]];
+            for ix in 0..nxh {
+                let k = wavevector::<D>(kx[ix], kyz);
+                let mut v: [Complex64; D] = std::array::from_fn(|c| rows[c][ix]);
+                project(&k, &mut v);
+                for c in 0..D {
                     rows[c][ix] = v[c];
                 }
             }
@@ -355,8 +363,21 @@ impl SpectralNs {
     /// only where there are solids (the impulses and the penalty of L2020 eqs. 35-38).
     pub fn advance_intermediate_on(&mut self, rows: &[bool]) {
         self.advection();
+        match self.grid.dims {
+            2 => self.advance_modes::<2>(),
+            _ => self.advance_modes::<3>(),
+        }
+        Self::sync_rows(&mut self.transform, &self.u_hat, &mut self.u, rows);
+        for (r, s) in self.stale.iter_mut().enumerate() {
+            *s = !rows.get(r).copied().unwrap_or(true);
+        }
+    }
+
+    /// The spectral part of [`Self::advance_intermediate_on`] for `D` components: the loop
+    /// over modes, compiled once per dimension so that the component loops unroll and each
+    /// row's slices are taken once.
+    fn advance_modes<const D: usize>(&mut self) {
         let g = self.grid;
-        let d = g.dims;
         let dt = self.dt;
         let w = &self.waves;
         let decay = &self.decay;
@@ -364,30 +385,39 @@ impl SpectralNs {
         let force = &self.force_hat;
         let forced = !force.is_empty();
         let nxh = g.nxh();
-        let mean_kick: [f64; 3] =
+        let mean_kick: [f64; D] =
             std::array::from_fn(|c| dt * self.body_accel[c] * g.cells() as f64);
+        let (kx, keep_x, decay_x) = (&w.x.k[..nxh], &w.x.keep[..nxh], &decay[0][..nxh]);
         let mut fields = slices(&mut self.u_hat);
-        for_each_row(&mut fields[..d], nxh, |r, rows| {
+        for_each_row(&mut fields[..D], nxh, |r, rows| {
+            let rows = components::<D>(rows);
             let (iy, iz) = g.row_yz(r);
             let eyz = decay[1][iy] * decay[2][iz];
             let keep_yz = w.y.keep[iy] && w.z.keep[iz];
+            let kyz = [w.y.k[iy], w.z.k[iz]];
+            let span = r * nxh..(r + 1) * nxh;
+            // Row r of what N̂ is formed from: the three products (2D) or N̂ itself (3D).
+            let nl: [&[Complex64]; 3] = std::array::from_fn(|j| &nl[j][span.clone()]);
+            let force: [&[Complex64]; D] = std::array::from_fn(|c| match force.get(c) {
+                Some(f) => &f[span.clone()],
+                None => &[],
+            });
             for ix in 0..nxh {
-                let e = decay[0][ix] * eyz;
-                let keep = keep_yz && w.x.keep[ix];
-                let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]];
-                let mut v = [Complex64::default(); 3];
-                for c in 0..d {
+                let e = decay_x[ix] * eyz;
+                let keep = keep_yz && keep_x[ix];
+                let k = wavevector::<D>(kx[ix], kyz);
+                let mut v = [Complex64::default(); D];
+                for c in 0..D {
                     let mut s = rows[c][ix];
                     if keep {
-                        let i = r * nxh + ix;
-                        let n = if d == 2 {
+                        let n = if D == 2 {
                             // N̂_c = -i k_x P̂_cx - i k_y P̂_cy, summed as the 3D path does.
                             let mut n = Complex64::default();
-                            n += minus_i_k(k[0], nl[PAIR_2D[c][0]][i]);
-                            n += minus_i_k(k[1], nl[PAIR_2D[c][1]][i]);
+                            n += minus_i_k(k[0], nl[PAIR_2D[c][0]][ix]);
+                            n += minus_i_k(k[1], nl[PAIR_2D[c][1]][ix]);
                             n
                         } else {
-                            nl[c][i]
+                            nl[c][ix]
                         };
                         s += n * dt;
                     }
@@ -395,20 +425,16 @@ impl SpectralNs {
                         s.re += mean_kick[c];
                     }
                     if forced {
-                        s += force[c][r * nxh + ix] * dt;
+                        s += force[c][ix] * dt;
                     }
                     v[c] = s * e;
                 }
-                project(&k, &mut v, d);
-                for c in 0..d {
+                project(&k, &mut v);
+                for c in 0..D {
                     rows[c][ix] = v[c];
                 }
             }
         });
-        Self::sync_rows(&mut self.transform, &self.u_hat, &mut self.u, rows);
-        for (r, s) in self.stale.iter_mut().enumerate() {
-            *s = !rows.get(r).copied().unwrap_or(true);
-        }
     }
 
     /// `û += P f̂` with `f` given component by component in real space (L2020 eqs. 37–38:
@@ -445,25 +471,36 @@ impl SpectralNs {
             |c, r, out| force(c, r, &u[c][r * nx..(r + 1) * nx], out),
             Modes::All,
         );
+        match d {
+            2 => self.add_projected_modes::<2>(),
+            _ => self.add_projected_modes::<3>(),
+        }
+        self.sync_real();
+    }
+
+    /// `û += P f̂` on the modes, `f̂` in `nl_hat`, for `D` components.
+    fn add_projected_modes<const D: usize>(&mut self) {
+        let g = self.grid;
         let w = &self.waves;
         let f_hat = &self.nl_hat;
         let nxh = g.nxh();
+        let kx = &w.x.k[..nxh];
         let mut fields = slices(&mut self.u_hat);
-        for_each_row(&mut fields[..d], nxh, |r, rows| {
+        for_each_row(&mut fields[..D], nxh, |r, rows| {
+            let rows = components::<D>(rows);
             let (iy, iz) = g.row_yz(r);
+            let kyz = [w.y.k[iy], w.z.k[iz]];
+            let span = r * nxh..(r + 1) * nxh;
+            let f: [&[Complex64]; D] = std::array::from_fn(|c| &f_hat[c][span.clone()]);
             for ix in 0..nxh {
-                let k = [w.x.k[ix], w.y.k[iy], w.z.k[iz]];
-                let mut v = [Complex64::default(); 3];
-                for c in 0..d {
-                    v[c] = f_hat[c][r * nxh + ix];
-                }
-                project(&k, &mut v, d);
-                for c in 0..d {
+                let k = wavevector::<D>(kx[ix], kyz);
+                let mut v: [Complex64; D] = std::array::from_fn(|c| f[c][ix]);
+                project(&k, &mut v);
+                for c in 0..D {
                     rows[c][ix] += v[c];
                 }
             }
         });
-        self.sync_real();
     }
 
     /// Kinetic energy `ρ/2 Σ |u|²` over all cells (cell volume 1).
@@ -603,21 +640,36 @@ fn minus_i_k(k: f64, p: Complex64) -> Complex64 {
     Complex64::new(k * p.im, -k * p.re)
 }
 
-/// Remove the component of `v` along `k` (first `d` components): `v -= k (k·v) / k²`.
+/// Remove the component of `v` along `k`: `v -= k (k·v) / k²`.
 #[inline]
-fn project(k: &[f64; 3], v: &mut [Complex64; 3], d: usize) {
+fn project<const D: usize>(k: &[f64; D], v: &mut [Complex64; D]) {
     let mut k2 = 0.0;
     let mut kv = Complex64::default();
-    for c in 0..d {
+    for c in 0..D {
         k2 += k[c] * k[c];
         kv += v[c] * k[c];
     }
     if k2 > 0.0 {
         let s = kv / k2;
-        for c in 0..d {
+        for c in 0..D {
             v[c] -= s * k[c];
         }
     }
+}
+
+/// The first `D` of (k_x, k_y, k_z).
+#[inline]
+fn wavevector<const D: usize>(kx: f64, [ky, kz]: [f64; 2]) -> [f64; D] {
+    let k = [kx, ky, kz];
+    std::array::from_fn(|c| k[c])
+}
+
+/// The `D` component rows [`for_each_row`] hands over, as an array.
+#[inline]
+fn components<'a, 'b, const D: usize>(
+    rows: &'a mut [&'b mut [Complex64]],
+) -> &'a mut [&'b mut [Complex64]; D] {
+    rows.try_into().expect("one row per component")
 }
 
 #[cfg(test)]
