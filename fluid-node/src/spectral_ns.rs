@@ -296,58 +296,83 @@ impl SpectralNs {
         // no pass zeroes the three spectra first.
         for a in 0..d {
             for b in a..d {
-                let (set_first, set_second) = (a == 0 && b == 0, a == 0 && b > 0);
                 self.transform.forward_rows(
                     &mut [&mut self.tmp_hat[..]],
                     |_, r, out| product((a, b), r, out),
                     band,
                 );
-                let w = &self.waves;
-                let p_hat = &self.tmp_hat;
-                let nxh = g.nxh();
-                let axis_k = |axis: usize, ix: usize, iy: usize, iz: usize| match axis {
-                    0 => w.x.k[ix],
-                    1 => w.y.k[iy],
-                    _ => w.z.k[iz],
-                };
-                let (lo, hi) = self.nl_hat.split_at_mut(b);
-                // rows[0] = N_a, rows[1] = N_b when a != b.
-                let nb: &mut [Complex64] = &mut hi[0][..];
-                let mut pair: [&mut [Complex64]; 2] = if a == b {
-                    [nb, &mut []]
-                } else {
-                    [&mut lo[a][..], nb]
-                };
-                let fields = if a == b {
-                    &mut pair[..1]
-                } else {
-                    &mut pair[..]
-                };
-                for_each_row(fields, nxh, |r, rows| {
-                    let (iy, iz) = g.row_yz(r);
-                    let p_row = &p_hat[r * nxh..(r + 1) * nxh];
-                    for ix in 0..nxh {
-                        let p = p_row[ix];
-                        // N_a -= i k_b P; N_b -= i k_a P (a != b). Modes outside the band
-                        // get unfinished values, which the step never reads.
-                        let n = minus_i_k(axis_k(b, ix, iy, iz), p);
-                        if set_first {
-                            rows[0][ix] = n;
-                        } else {
-                            rows[0][ix] += n;
-                        }
-                        if rows.len() == 2 {
-                            let n = minus_i_k(axis_k(a, ix, iy, iz), p);
-                            if set_second {
-                                rows[1][ix] = n;
-                            } else {
-                                rows[1][ix] += n;
-                            }
-                        }
-                    }
-                });
+                let (waves, p_hat, nl) = (&self.waves, &self.tmp_hat[..], &mut self.nl_hat[..]);
+                match (a, b) {
+                    (0, 0) => Self::add_advection_term::<0, 0>(g, waves, p_hat, nl),
+                    (0, 1) => Self::add_advection_term::<0, 1>(g, waves, p_hat, nl),
+                    (0, 2) => Self::add_advection_term::<0, 2>(g, waves, p_hat, nl),
+                    (1, 1) => Self::add_advection_term::<1, 1>(g, waves, p_hat, nl),
+                    (1, 2) => Self::add_advection_term::<1, 2>(g, waves, p_hat, nl),
+                    _ => Self::add_advection_term::<2, 2>(g, waves, p_hat, nl),
+                }
             }
         }
+    }
+
+    /// 3D: the transformed product `P̂ = (u_A u_B)^` in `tmp_hat` into `N̂` in `nl_hat`:
+    /// `N̂_A -= i k_B P̂` and, for A != B, `N̂_B -= i k_A P̂`; the first product each `N̂_c`
+    /// appears in, (0, c), writes it. One function per pair, so that the loop over modes has
+    /// no branch on the pair. Modes outside the band get unfinished values, which the step
+    /// never reads.
+    fn add_advection_term<const A: usize, const B: usize>(
+        g: Grid,
+        w: &Wavenumbers,
+        p_hat: &[Complex64],
+        nl_hat: &mut [Vec<Complex64>],
+    ) {
+        let nxh = g.nxh();
+        let kx = &w.x.k[..nxh];
+        let (lo, hi) = nl_hat.split_at_mut(B);
+        let nb: &mut [Complex64] = &mut hi[0][..];
+        // fields[0] = N̂_A, fields[1] = N̂_B when A != B.
+        let mut pair: [&mut [Complex64]; 2] = if A == B {
+            [nb, &mut []]
+        } else {
+            [&mut lo[A][..], nb]
+        };
+        let fields = if A == B {
+            &mut pair[..1]
+        } else {
+            &mut pair[..]
+        };
+        for_each_row(fields, nxh, |r, rows| {
+            let (iy, iz) = g.row_yz(r);
+            let p = &p_hat[r * nxh..(r + 1) * nxh];
+            let axis = |axis: usize, ix: usize| match axis {
+                0 => kx[ix],
+                1 => w.y.k[iy],
+                _ => w.z.k[iz],
+            };
+            let (first, rest) = rows.split_at_mut(1);
+            let na = &mut first[0][..nxh];
+            if A == B {
+                for ix in 0..nxh {
+                    let n = minus_i_k(axis(B, ix), p[ix]);
+                    if A == 0 {
+                        na[ix] = n;
+                    } else {
+                        na[ix] += n;
+                    }
+                }
+                return;
+            }
+            let nb = &mut rest[0][..nxh];
+            for ix in 0..nxh {
+                let n = minus_i_k(axis(B, ix), p[ix]);
+                na[ix] += n;
+                let n = minus_i_k(axis(A, ix), p[ix]);
+                if A == 0 {
+                    nb[ix] = n;
+                } else {
+                    nb[ix] += n;
+                }
+            }
+        });
     }
 
     /// uⁿ → u* (L2020 eq. 34 without capillarity): advection, body force, exact viscous
