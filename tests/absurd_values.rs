@@ -2,7 +2,8 @@
 //! refused by `coordinator check` with a clear message: no panic, no hang, no exit by signal;
 //! and a scene `check` accepts runs two steps in-process to the same standard (it may still
 //! end with a clear error, e.g. a fibre that became unstable). One scene per kind of run
-//! (fibre alone, SPM with walls, FPD, binary fluid), every numeric key of each. Two such values once got through: `fluid.xi_cutoff = 1e300` kept the SPM
+//! (fibre alone, SPM with walls, FPD, binary fluid), every numeric key of each; a message
+//! writes such a number with an exponent, not as hundreds of digits. Two such values once got through: `fluid.xi_cutoff = 1e300` kept the SPM
 //! stiffness check iterating on NaN for minutes, and `fluid.interface_ratio = 1e300` passed
 //! the FPD lattice check (the box's extent wrapped round to zero) and the run then ran out of
 //! memory.
@@ -89,6 +90,17 @@ fn judge(failures: &mut Vec<String>, what: &str, status: Option<ExitStatus>, err
     if err.contains("panicked") {
         failures.push(format!("{what}: panic: {err}"));
     }
+    // 1e300 written out in full is 301 digits: a message shows it with an exponent.
+    if let Some(line) = err.lines().find(|l| longest_digit_run(l) >= 25) {
+        failures.push(format!("{what}: a number written out in full: {line}"));
+    }
+}
+
+fn longest_digit_run(s: &str) -> usize {
+    s.split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0)
 }
 
 #[test]

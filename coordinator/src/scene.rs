@@ -5,6 +5,7 @@
 //! node) and refuses what it does not know when it is configured, so that a new model adds
 //! keys without the coordinator or the other node changing.
 use crate::shear_groups::Resolved;
+use cosim::scene_keys::Num;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -221,7 +222,7 @@ fn check_ranges(s: &Scene) -> Result<(), SceneError> {
     if !(s.time.dt.is_finite() && s.time.dt > 0.0) {
         return Err(err(format!(
             "key `time.dt`: expected a positive number, got {}",
-            s.time.dt
+            Num(s.time.dt)
         )));
     }
     if s.time.steps == 0 {
@@ -230,7 +231,8 @@ fn check_ranges(s: &Scene) -> Result<(), SceneError> {
     if let Some(tol) = s.time.rest_tolerance {
         if !(tol.is_finite() && tol > 0.0) {
             return Err(err(format!(
-                "key `time.rest_tolerance`: expected a positive number, got {tol}"
+                "key `time.rest_tolerance`: expected a positive number, got {}",
+                Num(tol)
             )));
         }
     }

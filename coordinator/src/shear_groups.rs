@@ -19,6 +19,7 @@
 //! (`fluid.confinement`, `fluid.particle_shear_reynolds`), so a rounded gap shows there.
 
 use crate::metrics::number;
+use cosim::scene_keys::Num;
 
 /// The FPD fluid's default density (`fluid.density` absent), as the fluid node reads it.
 const DEFAULT_DENSITY: f64 = 1.0;
@@ -38,7 +39,11 @@ fn group_value(fluid: &toml::Table, key: &str) -> Result<Option<f64>, String> {
         None => Ok(None),
         Some(v) => match number(Some(v)) {
             Some(x) if x.is_finite() && x > 0.0 => Ok(Some(x)),
-            _ => Err(format!("fluid.{key}: expected a positive number, got {v}")),
+            Some(x) => Err(format!(
+                "fluid.{key}: expected a positive number, got {}",
+                Num(x)
+            )),
+            None => Err(format!("fluid.{key}: expected a positive number, got {v}")),
         },
     }
 }
@@ -231,7 +236,9 @@ fn set_gap(
     let h = ny - margin;
     if h < 1.0 {
         return Err(format!(
-            "fluid.confinement = {c}: the gap l_c / C = {exact} is below one lattice node"
+            "fluid.confinement = {}: the gap l_c / C = {} is below one lattice node",
+            Num(c),
+            Num(exact)
         ));
     }
     fluid.insert(

@@ -98,7 +98,45 @@ pub fn describe_value(v: &toml::Value) -> String {
         toml::Value::String(s) => format!("the string {s:?}"),
         toml::Value::Table(_) => "a table".into(),
         toml::Value::Array(_) => "an array".into(),
+        // Very large or small numbers with an exponent, not hundreds of digits.
+        toml::Value::Float(x) if Num(*x).to_string().contains('e') => Num(*x).to_string(),
         other => other.to_string(),
+    }
+}
+
+/// A number as a message shows it: as `Display` writes it (`6`, `0.25`, `-1`), except
+/// that magnitudes from 1e16 up or below 1e-5 are written with an exponent (`1e300`,
+/// `-2.5e-7`) rather than as hundreds of digits. A precision applies to either form
+/// (`{:.3}`: `0.125`, `1.000e300`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let a = self.0.abs();
+        let exponent = a.is_finite() && (a >= 1e16 || (a > 0.0 && a < 1e-5));
+        match (exponent, f.precision()) {
+            (true, Some(p)) => write!(f, "{:.*e}", p, self.0),
+            (true, None) => write!(f, "{:e}", self.0),
+            (false, Some(p)) => write!(f, "{:.*}", p, self.0),
+            (false, None) => write!(f, "{}", self.0),
+        }
+    }
+}
+
+/// Numbers as a message shows them, `[a, b, c]` (each as [`Num`]).
+pub struct Nums<'a>(pub &'a [f64]);
+
+impl std::fmt::Display for Nums<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "[")?;
+        for (i, &x) in self.0.iter().enumerate() {
+            if i > 0 {
+                write!(f, ", ")?;
+            }
+            write!(f, "{}", Num(x))?;
+        }
+        write!(f, "]")
     }
 }
 
@@ -107,7 +145,10 @@ pub fn positive(path: &str, v: f64) -> Result<f64, String> {
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
-        Err(format!("{path}: expected a positive number, got {v}"))
+        Err(format!(
+            "{path}: expected a positive number, got {}",
+            Num(v)
+        ))
     }
 }
 
@@ -351,6 +392,34 @@ mod tests {
         assert_eq!(
             e,
             "fibre.0: unknown key `bead`, did you mean `beads`? (expected `beads`)"
+        );
+    }
+
+    #[test]
+    fn numbers_in_messages_are_short_at_any_magnitude() {
+        let shown = |x: f64| Num(x).to_string();
+        for (x, text) in [
+            (6.0, "6"),
+            (-1.0, "-1"),
+            (0.25, "0.25"),
+            (0.0, "0"),
+            (1.5e15, "1500000000000000"),
+            (1e16, "1e16"),
+            (-1e300, "-1e300"),
+            (1e-300, "1e-300"),
+            (2.5e-7, "2.5e-7"),
+            (1e-5, "0.00001"),
+            (f64::NAN, "NaN"),
+            (f64::NEG_INFINITY, "-inf"),
+        ] {
+            assert_eq!(shown(x), text, "{x:e}");
+        }
+        assert_eq!(Nums(&[1e300, 0.0, -2.0]).to_string(), "[1e300, 0, -2]");
+        assert_eq!(format!("{:.3}", Num(0.125)), "0.125");
+        assert_eq!(format!("{:.3}", Num(1e300)), "1.000e300");
+        assert_eq!(
+            positive("fluid.xi", -1e300).unwrap_err(),
+            "fluid.xi: expected a positive number, got -1e300"
         );
     }
 }

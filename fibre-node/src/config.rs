@@ -9,6 +9,7 @@ use crate::spm_exchange::SmoothedProfile;
 use cosim::profile::{DEFAULT_CUTOFF_OVER_XI, DEFAULT_FPD_INTERFACE_RATIO, DEFAULT_XI};
 use cosim::scene_keys::{
     self, describe_value as describe_toml, deserialize_at as deserialize, number as toml_number,
+    Num,
 };
 
 /// Which fibre model a `[[fibre]]` table asks for.
@@ -477,10 +478,13 @@ fn stiffness_from_group(
     // a stiffness.
     match group {
         FibreGroup::Bending if !(x.is_finite() && x >= 0.0) => {
-            return Err(format!("{p}.{key}: expected a number >= 0, got {x}"));
+            return Err(format!("{p}.{key}: expected a number >= 0, got {}", Num(x)));
         }
         FibreGroup::Stretch if !(x.is_finite() && x > 0.0) => {
-            return Err(format!("{p}.{key}: expected a positive number, got {x}"));
+            return Err(format!(
+                "{p}.{key}: expected a positive number, got {}",
+                Num(x)
+            ));
         }
         _ => {}
     }

@@ -223,7 +223,11 @@ fn too_large_for_the_beam(
          time.dt / fibre.{n}.substeps = {:?} / {} = {h:.6e} exceeds the stable fibre step \
          {h_ok:.6e} (symplectic Euler, omega_max = {:.6e}, damping {}, 2 % margin); \
          lower time.dt to at most {:.6e}{advice}",
-        scene.dt, cfg.substeps, lim.omega_max, lim.damping, lim.dt_limit
+        scene.dt,
+        cfg.substeps,
+        lim.omega_max,
+        cosim::scene_keys::Num(lim.damping),
+        lim.dt_limit
     )
 }
 

@@ -5,7 +5,7 @@ use crate::config::{
     FibreConfig, LoadConfig, ModelKind, DEFAULT_ENERGY_CONSISTENT, DEFAULT_POISSON_RATIO,
     MAX_BEADS, MAX_SUBSTEPS,
 };
-use cosim::scene_keys::positive;
+use cosim::scene_keys::{positive, Num, Nums};
 use serde::Deserialize;
 
 #[derive(Deserialize)]
@@ -56,14 +56,14 @@ struct RawLoad {
 }
 
 fn fmt_vec(v: &[f64; 3]) -> String {
-    format!("[{}, {}, {}]", v[0], v[1], v[2])
+    Nums(v).to_string()
 }
 
 fn non_negative(path: &str, v: f64) -> Result<f64, String> {
     if v.is_finite() && v >= 0.0 {
         Ok(v)
     } else {
-        Err(format!("{path}: expected a number >= 0, got {v}"))
+        Err(format!("{path}: expected a number >= 0, got {}", Num(v)))
     }
 }
 
@@ -71,7 +71,7 @@ fn finite(path: &str, v: f64) -> Result<f64, String> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(format!("{path}: expected a finite number, got {v}"))
+        Err(format!("{path}: expected a finite number, got {}", Num(v)))
     }
 }
 
@@ -264,8 +264,9 @@ fn resolvable(p: &str, start: [f64; 3], length: f64, spacing: f64) -> Result<(),
     let far = start.iter().fold(length, |m, x| m.max(x.abs() + length));
     if far * f64::EPSILON > 1e-6 * spacing {
         return Err(format!(
-            "{p}.start: {start:?} lies so far out that the bead spacing {spacing} is not \
-             resolved in double precision; place the fibre within the domain"
+            "{p}.start: {start:?} lies so far out that the bead spacing {} is not \
+             resolved in double precision; place the fibre within the domain",
+            Num(spacing)
         ));
     }
     Ok(())

@@ -20,6 +20,7 @@
 //! (`fibre.N.exchange = "implicit"`, `crate::fibre`) takes the drag at the new velocity and
 //! has no such limit: these beads are not checked.
 use cosim::profile::{profile_moment, profile_volume};
+use cosim::scene_keys::Num;
 
 /// Largest accepted ratio of the fluid in a bead's profile to the bead, in mass and in
 /// moment of inertia: the bound below which the explicit exchange is stable for any flow.
@@ -70,6 +71,13 @@ pub fn ratios(
 /// Refuse a bead too light for the explicit exchange, naming the ratio, the limit and the
 /// cures. `p` is the fibre's key prefix (`fibre.N`).
 pub fn check(p: &str, r: ExchangeRatios, density: f64) -> Result<(), String> {
+    if r.mass.is_nan() || r.inertia.is_nan() {
+        // inf / inf: the bead and its profile both overflow.
+        return Err(format!(
+            "{p}: a bead and the fluid in its smoothed profile are too large to compare (their \
+             masses overflow); {p}.bead_radius must fit the fluid's grid"
+        ));
+    }
     let worst = r.mass.max(r.inertia);
     if worst < MAX_PROFILE_TO_BEAD {
         return Ok(());
@@ -81,12 +89,13 @@ pub fn check(p: &str, r: ExchangeRatios, density: f64) -> Result<(), String> {
     };
     Err(format!(
         "{p}: the beads are too light for the explicit SPM momentum exchange: the fluid in a \
-         bead's smoothed profile (L2020 eq. 25, fluid.xi, fluid.xi_cutoff) has {ratio:.3} times \
+         bead's smoothed profile (L2020 eq. 25, fluid.xi, fluid.xi_cutoff) has {:.3} times \
          the bead's {what}, at or above the limit {MAX_PROFILE_TO_BEAD} below which the \
          exchange is stable for any flow; raise {p}.density to at least {:.4}, set \
          {p}.bead_inertia = \"profile\" to give the bead the moment of inertia of its profile, \
          or set {p}.exchange = \"implicit\" (stable for any ratio)",
-        density * worst / MAX_PROFILE_TO_BEAD * 1.0001
+        Num(ratio),
+        Num(density * worst / MAX_PROFILE_TO_BEAD * 1.0001)
     ))
 }
 
@@ -108,6 +117,14 @@ mod tests {
             assert!((r.mass - mass).abs() < 1e-3, "{dims}D {r:?}");
             assert!((r.inertia - inertia).abs() < 1e-3, "{dims}D {r:?}");
         }
+        // A radius whose bead and profile overflow is refused with a reason, not a NaN.
+        let (m, i) = bead_mass_inertia(1.0, 1e200, false);
+        let r = ratios(wide, 1.0, 1e200, 3, m, i);
+        let e = check("fibre.0", r, 1.0).unwrap_err();
+        assert!(
+            e.contains("bead_radius must fit") && !e.contains("NaN"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -28,6 +28,7 @@ use crate::grid::Grid;
 use crate::spectral_ns::SpectralNs;
 use crate::spm::Spm;
 use crate::stability::TimeStepLimit;
+use cosim::scene_keys::Num;
 use cosim::Detail;
 use rustfft::num_complex::Complex64;
 pub use scene::{BinaryConfig, InitialPsi};
@@ -180,7 +181,9 @@ impl BinaryFluid {
                 "time step too large for the binary fluid (capillary limit): time.dt = {} \
                  exceeds {:.6e} ({}); lower time.dt or fluid.binary.e0 / sigma, or raise \
                  fluid.viscosity",
-                self.cfg.ch.dt, cap.dt_max, cap.detail
+                Num(self.cfg.ch.dt),
+                cap.dt_max,
+                cap.detail
             ));
         }
         all.push(cap);

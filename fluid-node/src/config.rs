@@ -5,6 +5,7 @@
 //!
 //! Units are grid units: the grid spacing is 1, lengths are in grid spacings.
 //! Every refusal names the dotted key, the value and what was expected; nothing panics.
+use cosim::scene_keys::Num;
 use cosim::scene_keys::{
     self, describe_value as describe_toml, deserialize_at as deserialize, positive,
 };
@@ -330,10 +331,13 @@ fn walls(
     let need = 2.0 * xi_cutoff + 2.0;
     if gap < need {
         return Err(format!(
-            "walls.thickness: {thickness} leaves a gap of {gap} grid units between the \
-             walls' inner faces in a grid of ny = {}, expected at least {need} \
+            "walls.thickness: {} leaves a gap of {} grid units between the \
+             walls' inner faces in a grid of ny = {}, expected at least {} \
              (2 fluid.xi_cutoff + 2)",
-            grid[1]
+            Num(thickness),
+            Num(gap),
+            grid[1],
+            Num(need)
         ));
     }
     Ok(Some(WallsConfig {
@@ -365,9 +369,10 @@ fn check_cutoff_boxes(fibres: &[FibreInfo], sizes: &[usize], xi_cutoff: f64) -> 
         let smallest = sizes.iter().copied().min().unwrap_or(0);
         if smallest < need {
             return Err(format!(
-                "fibre.{n}.bead_radius: {} plus fluid.xi_cutoff {xi_cutoff} needs a grid \
+                "fibre.{n}.bead_radius: {} plus fluid.xi_cutoff {} needs a grid \
                  of at least {need} nodes along every axis, fluid.grid has {smallest}",
-                f.bead_radius
+                Num(f.bead_radius),
+                Num(xi_cutoff)
             ));
         }
     }

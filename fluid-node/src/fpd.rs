@@ -104,15 +104,16 @@ impl FpdConfig {
 /// What the coupling refuses.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FpdError {
-    #[error("{name} = {value} is invalid: {why}")]
+    #[error("{name} = {} is invalid: {why}", cosim::scene_keys::Num(*.value))]
     Parameter {
         name: &'static str,
         value: f64,
         why: String,
     },
     #[error(
-        "the {nx} x {ny} lattice is too small for the bead box: a + cutoff xi = {reach} \
+        "the {nx} x {ny} lattice is too small for the bead box: a + cutoff xi = {} \
          needs {extent} nodes along x{}",
+        cosim::scene_keys::Num(*.reach),
         if *.periodic_y { " and y (periodic)" } else { "" }
     )]
     LatticeTooSmall {

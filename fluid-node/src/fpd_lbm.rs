@@ -15,6 +15,7 @@
 use crate::fpd::{FpdConfig, FpdCoupling};
 use crate::mrt_d2q9::{MrtConfig, MrtD2q9, YBoundary};
 use crate::start_geometry::{StartBox, StartCheck, WallFaces};
+use cosim::scene_keys::Num;
 use cosim::scene_keys::{self, deserialize_at};
 use cosim::{BeadForce, BeadState, ComponentError, Configured, Exchange, PhaseReport, Port};
 use serde::Deserialize;
@@ -229,8 +230,9 @@ fn check_lattice_units(table: &toml::Table) -> Result<(), String> {
     let dt = scene_keys::time_step(table)?;
     if dt != 1.0 {
         return Err(format!(
-            "time.dt = {dt}: fluid.method = \"fpd-lbm\" runs in lattice units, one lattice step \
-             per step; set time.dt = 1 and express viscosity and velocities per lattice step"
+            "time.dt = {}: fluid.method = \"fpd-lbm\" runs in lattice units, one lattice step \
+             per step; set time.dt = 1 and express viscosity and velocities per lattice step",
+            Num(dt)
         ));
     }
     Ok(())
@@ -255,9 +257,11 @@ fn walls(table: &toml::Table) -> Result<Option<[f64; 2]>, String> {
         let mach = u.abs() * 3f64.sqrt();
         if mach.is_nan() || mach > MAX_WALL_MACH {
             return Err(format!(
-                "walls.velocity.{k} = {u}: Mach number |u| sqrt 3 = {mach:.3} exceeds the \
+                "walls.velocity.{k} = {}: Mach number |u| sqrt 3 = {:.3} exceeds the \
                  lattice's limit {MAX_WALL_MACH} (compressibility error ~ Ma^2); lower \
-                 the wall speed (and raise the viscosity to keep the Reynolds number)"
+                 the wall speed (and raise the viscosity to keep the Reynolds number)",
+                Num(*u),
+                Num(mach)
             ));
         }
     }
@@ -296,8 +300,9 @@ fn solid_layers(
     }
     if 2.0 * thickness >= ny as f64 {
         return Err(format!(
-            "fluid.solid_layers.thickness = {thickness}: two layers must leave fluid \
-             between them (gap ny = {ny})"
+            "fluid.solid_layers.thickness = {}: two layers must leave fluid \
+             between them (gap ny = {ny})",
+            Num(thickness)
         ));
     }
     if beads.iter().any(|&n| n > 0) {
@@ -319,12 +324,14 @@ fn cell_reynolds(fastest: f64, viscosity: f64, density: f64) -> Result<f64, Stri
     let cell_re = fastest * density / viscosity;
     if cell_re > MAX_CELL_REYNOLDS {
         return Err(format!(
-            "fluid (fpd-lbm): the cell Reynolds number max|u| dx / nu = {cell_re:.3} (max|u| = \
-             {fastest}, the fastest wall or stream; nu = fluid.viscosity / fluid.density = {}) \
+            "fluid (fpd-lbm): the cell Reynolds number max|u| dx / nu = {:.3} (max|u| = \
+             {}, the fastest wall or stream; nu = fluid.viscosity / fluid.density = {}) \
              exceeds {MAX_CELL_REYNOLDS}, beyond which this MRT lattice was measured to go \
              unstable; raise fluid.viscosity, or refine the grid (more nodes per bead diameter \
              at the same Reynolds number)",
-            viscosity / density
+            Num(cell_re),
+            Num(fastest),
+            Num(viscosity / density)
         ));
     }
     Ok(cell_re)

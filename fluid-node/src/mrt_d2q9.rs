@@ -96,13 +96,17 @@ impl Default for FixedRates {
 /// Check that a viscosity gives relaxation rates s_nu and s_q strictly inside (0, 2).
 pub fn check_viscosity(nu: f64) -> Result<(), String> {
     if !(nu.is_finite() && nu > 0.0) {
-        return Err(format!("viscosity {nu} is not a finite positive number"));
+        return Err(format!(
+            "viscosity {} is not a finite positive number",
+            cosim::scene_keys::Num(nu)
+        ));
     }
     let (sn, sq) = (s_nu(nu), s_q(nu));
     for (name, s) in [("s_nu", sn), ("s_q", sq)] {
         if !(s > 0.0 && s < 2.0) {
             return Err(format!(
-                "viscosity {nu} gives the relaxation rate {name} = {s}, outside (0, 2)"
+                "viscosity {} gives the relaxation rate {name} = {s}, outside (0, 2)",
+                cosim::scene_keys::Num(nu)
             ));
         }
     }

@@ -11,6 +11,7 @@
 //!   penalties, so the error depends on `nu dt / xi^2` (REFERENCE.md section 6, Nakayama &
 //!   Yamamoto 2005). It is reported as `fluid.spm_diffusion_number`, not refused.
 use crate::config::{FluidConfig, InitialVelocity};
+use cosim::scene_keys::Num;
 
 /// Advective CFL number allowed before the run.
 pub const CFL_MAX: f64 = 0.5;
@@ -47,12 +48,19 @@ pub fn limits(cfg: &FluidConfig) -> Vec<TimeStepLimit> {
         out.push(TimeStepLimit {
             name: "advective CFL",
             dt_max: CFL_MAX / u,
-            detail: format!("max|u| dt / dx <= {CFL_MAX} with max|u| = {u} (wall speeds), dx = 1"),
+            detail: format!(
+                "max|u| dt / dx <= {CFL_MAX} with max|u| = {} (wall speeds), dx = 1",
+                Num(u)
+            ),
         });
         out.push(TimeStepLimit {
             name: "advection with exact viscosity (explicit Euler)",
             dt_max: 2.0 * nu / (u * u),
-            detail: format!("max|u|^2 dt <= 2 nu with max|u| = {u}, nu = eta / rho = {nu}"),
+            detail: format!(
+                "max|u|^2 dt <= 2 nu with max|u| = {}, nu = eta / rho = {}",
+                Num(u),
+                Num(nu)
+            ),
         });
     }
     out
@@ -66,7 +74,10 @@ pub fn check(cfg: &FluidConfig) -> Result<Vec<TimeStepLimit>, String> {
             return Err(format!(
                 "time step too large for the fluid ({} limit): time.dt = {} exceeds {:.6e} \
                  ({}); lower time.dt or the wall speeds",
-                l.name, cfg.dt, l.dt_max, l.detail
+                l.name,
+                Num(cfg.dt),
+                l.dt_max,
+                l.detail
             ));
         }
     }

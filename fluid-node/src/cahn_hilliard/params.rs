@@ -120,8 +120,9 @@ pub enum CahnHilliardError {
         got: usize,
     },
     #[error(
-        "cahn-hilliard: time step too large ({name} limit): dt = {dt} exceeds {dt_max:.6e} \
-         ({detail})"
+        "cahn-hilliard: time step too large ({name} limit): dt = {} exceeds {dt_max:.6e} \
+         ({detail})",
+        cosim::scene_keys::Num(*.dt)
     )]
     TimeStep {
         name: &'static str,

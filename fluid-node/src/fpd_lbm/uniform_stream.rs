@@ -48,16 +48,21 @@ impl UniformStream {
         // A NaN velocity is refused too.
         if mach.is_nan() || mach > max_mach {
             return Err(format!(
-                "fluid.stream.velocity = {u}: Mach number |U| sqrt 3 = {mach:.3} exceeds the \
-                 lattice's limit {max_mach}; lower U (and the viscosity, to keep Re)"
+                "fluid.stream.velocity = {}: Mach number |U| sqrt 3 = {:.3} exceeds the \
+                 lattice's limit {max_mach}; lower U (and the viscosity, to keep Re)",
+                cosim::scene_keys::Num(u),
+                cosim::scene_keys::Num(mach)
             ));
         }
         if let Some([b, t]) = walls {
             if b != u || t != u {
                 return Err(format!(
-                    "walls.velocity = [{b}, {t}] with fluid.stream.velocity = {u}: in a uniform \
+                    "walls.velocity = {} with fluid.stream.velocity = {}: in a uniform \
                      stream the walls are the far field and slide at the stream speed; set \
-                     walls.velocity = [{u}, {u}] or remove [walls] (periodic in y)"
+                     walls.velocity = {} or remove [walls] (periodic in y)",
+                    cosim::scene_keys::Nums(&[b, t]),
+                    cosim::scene_keys::Num(u),
+                    cosim::scene_keys::Nums(&[u, u])
                 ));
             }
         }
