@@ -2,6 +2,7 @@
 //! code, never a panic trace.
 use clap::{Parser, Subcommand};
 use coordinator::{export, runner, scene, study};
+use cosim::scene_keys::Sig;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -230,10 +231,10 @@ fn check(config: Option<&std::path::Path>, set: &[String]) -> Result<(), String>
         println!("group:    {g}");
     }
     for (name, limit) in &configured.time_step_limits {
-        println!("limit:    {name}: dt <= {limit:.6e}");
+        println!("limit:    {name}: dt <= {}", Sig(*limit));
     }
     for (name, v) in &configured.derived {
-        println!("derived:  {name} = {v:.6e}");
+        println!("derived:  {name} = {}", Sig(*v));
     }
     for n in &configured.notes {
         println!("note:     {n}");

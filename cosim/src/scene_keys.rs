@@ -124,6 +124,38 @@ impl std::fmt::Display for Num {
     }
 }
 
+/// A computed number as a report shows it: seven significant digits with the trailing
+/// zeros dropped, written plainly from 1e-3 to below 1e7 (`108`, `0.6976744`, `1`) and with
+/// an exponent outside (`1.388837e-4`, `6.02e23`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sig(pub f64);
+
+impl std::fmt::Display for Sig {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        if x == 0.0 || !x.is_finite() {
+            return write!(f, "{}", if x == 0.0 { 0.0 } else { x });
+        }
+        // The exponent after rounding to seven digits (9.9999996 rounds to 1.000000e1).
+        let e = format!("{x:.6e}");
+        let (mantissa, exp) = e.split_once('e').unwrap_or((&e, "0"));
+        let exp: i32 = exp.parse().unwrap_or(0);
+        let trim = |t: &str| -> String {
+            if t.contains('.') {
+                t.trim_end_matches('0').trim_end_matches('.').to_string()
+            } else {
+                t.to_string()
+            }
+        };
+        if (-3..7).contains(&exp) {
+            let decimals = (6 - exp) as usize;
+            write!(f, "{}", trim(&format!("{x:.decimals$}")))
+        } else {
+            write!(f, "{}e{exp}", trim(mantissa))
+        }
+    }
+}
+
 /// Numbers as a message shows them, `[a, b, c]` (each as [`Num`]).
 pub struct Nums<'a>(pub &'a [f64]);
 
@@ -415,6 +447,24 @@ mod tests {
             assert_eq!(shown(x), text, "{x:e}");
         }
         assert_eq!(Nums(&[1e300, 0.0, -2.0]).to_string(), "[1e300, 0, -2]");
+        let sig = |x: f64| Sig(x).to_string();
+        for (x, text) in [
+            (108.0, "108"),
+            (1.0, "1"),
+            (0.0, "0"),
+            (-0.0, "0"),
+            (224.9506123, "224.9506"),
+            (0.697674418, "0.6976744"),
+            (1.388837e-4, "1.388837e-4"),
+            (0.001, "0.001"),
+            (9.9999996, "10"),
+            (9_999_999.6, "1e7"),
+            (1234567.0, "1234567"),
+            (-6.02e23, "-6.02e23"),
+            (f64::INFINITY, "inf"),
+        ] {
+            assert_eq!(sig(x), text, "{x:e}");
+        }
         assert_eq!(format!("{:.3}", Num(0.125)), "0.125");
         assert_eq!(format!("{:.3}", Num(1e300)), "1.000e300");
         assert_eq!(
