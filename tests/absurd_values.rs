@@ -3,10 +3,10 @@
 //! and a scene `check` accepts runs two steps in-process to the same standard (it may still
 //! end with a clear error, e.g. a fibre that became unstable). One scene per kind of run
 //! (fibre alone, SPM with walls, FPD, binary fluid), every numeric key of each; a message
-//! writes such a number with an exponent, not as hundreds of digits. Two such values once got through: `fluid.xi_cutoff = 1e300` kept the SPM
-//! stiffness check iterating on NaN for minutes, and `fluid.interface_ratio = 1e300` passed
-//! the FPD lattice check (the box's extent wrapped round to zero) and the run then ran out of
-//! memory.
+//! writes such a number with an exponent, not as hundreds of digits. Two such values once
+//! got through: `fluid.xi_cutoff = 1e300` kept the SPM stiffness check iterating on NaN for
+//! minutes, and `fluid.interface_ratio = 1e300` passed the FPD lattice check (the box's
+//! extent wrapped round to zero) and the run then ran out of memory.
 mod common;
 use common::*;
 use std::process::{Command, ExitStatus, Stdio};

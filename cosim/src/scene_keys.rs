@@ -107,7 +107,8 @@ pub fn describe_value(v: &toml::Value) -> String {
 /// A number as a message shows it: as `Display` writes it (`6`, `0.25`, `-1`), except
 /// that magnitudes from 1e16 up or below 1e-5 are written with an exponent (`1e300`,
 /// `-2.5e-7`) rather than as hundreds of digits. A precision applies to either form
-/// (`{:.3}`: `0.125`, `1.000e300`).
+/// (`{:.3}`: `0.125`, `1.000e300`); a width or alignment does not (format into a string
+/// first to pad it).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Num(pub f64);
 
@@ -126,7 +127,7 @@ impl std::fmt::Display for Num {
 
 /// A computed number as a report shows it: seven significant digits with the trailing
 /// zeros dropped, written plainly from 1e-3 to below 1e7 (`108`, `0.6976744`, `1`) and with
-/// an exponent outside (`1.388837e-4`, `6.02e23`).
+/// an exponent outside (`1.388837e-4`, `6.02e23`). A width or precision does not apply.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sig(pub f64);
 

@@ -72,10 +72,12 @@ pub fn ratios(
 /// cures. `p` is the fibre's key prefix (`fibre.N`).
 pub fn check(p: &str, r: ExchangeRatios, density: f64) -> Result<(), String> {
     if r.mass.is_nan() || r.inertia.is_nan() {
-        // inf / inf: the bead and its profile both overflow.
+        // inf / inf (or 0 / 0): the bead and its profile both overflow, in mass or in moment
+        // of inertia, through the radius or the two densities.
         return Err(format!(
-            "{p}: a bead and the fluid in its smoothed profile are too large to compare (their \
-             masses overflow); {p}.bead_radius must fit the fluid's grid"
+            "{p}: a bead and the fluid in its smoothed profile cannot be compared: their \
+             masses or moments of inertia overflow; lower {p}.bead_radius (it must fit the \
+             fluid's grid), {p}.density or fluid.density"
         ));
     }
     let worst = r.mass.max(r.inertia);
@@ -122,7 +124,7 @@ mod tests {
         let r = ratios(wide, 1.0, 1e200, 3, m, i);
         let e = check("fibre.0", r, 1.0).unwrap_err();
         assert!(
-            e.contains("bead_radius must fit") && !e.contains("NaN"),
+            e.contains("lower fibre.0.bead_radius") && !e.contains("NaN"),
             "{e}"
         );
     }
