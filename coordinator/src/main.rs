@@ -324,15 +324,19 @@ fn print_result(summary: &serde_json::Value, out: &std::path::Path) {
         for (name, v) in m {
             match (v["reference"].as_f64(), v["relative_error"].as_f64()) {
                 (Some(r), Some(e)) => println!(
-                    "  {name} = {:.6} (reference {r:.6}, relative error {:.2} %)",
-                    v["value"].as_f64().unwrap_or(f64::NAN),
+                    "  {name} = {} (reference {}, relative error {:.2} %)",
+                    Sig(v["value"].as_f64().unwrap_or(f64::NAN)),
+                    Sig(r),
                     100.0 * e
                 ),
                 _ => match v["label"].as_str() {
                     Some(label) => {
                         println!("  {name} = {label} ({})", v["note"].as_str().unwrap_or(""))
                     }
-                    None => println!("  {name} = {}", v["value"]),
+                    None => match v["value"].as_f64() {
+                        Some(x) => println!("  {name} = {}", Sig(x)),
+                        None => println!("  {name} = {}", v["value"]),
+                    },
                 },
             }
         }
