@@ -19,7 +19,7 @@
 //! (`fluid.confinement`, `fluid.particle_shear_reynolds`), so a rounded gap shows there.
 
 use crate::metrics::number;
-use cosim::scene_keys::Num;
+use cosim::scene_keys::{positive, Num};
 
 /// The FPD fluid's default density (`fluid.density` absent), as the fluid node reads it.
 const DEFAULT_DENSITY: f64 = 1.0;
@@ -38,11 +38,7 @@ fn group_value(fluid: &toml::Table, key: &str) -> Result<Option<f64>, String> {
     match fluid.get(key) {
         None => Ok(None),
         Some(v) => match number(Some(v)) {
-            Some(x) if x.is_finite() && x > 0.0 => Ok(Some(x)),
-            Some(x) => Err(format!(
-                "fluid.{key}: expected a positive number, got {}",
-                Num(x)
-            )),
+            Some(x) => positive(&format!("fluid.{key}"), x).map(Some),
             None => Err(format!("fluid.{key}: expected a positive number, got {v}")),
         },
     }

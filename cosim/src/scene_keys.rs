@@ -99,7 +99,7 @@ pub fn describe_value(v: &toml::Value) -> String {
         toml::Value::Table(_) => "a table".into(),
         toml::Value::Array(_) => "an array".into(),
         // Very large or small numbers with an exponent, not hundreds of digits.
-        toml::Value::Float(x) if Num(*x).to_string().contains('e') => Num(*x).to_string(),
+        toml::Value::Float(x) if Num::needs_exponent(*x) => Num(*x).to_string(),
         other => other.to_string(),
     }
 }
@@ -112,11 +112,17 @@ pub fn describe_value(v: &toml::Value) -> String {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Num(pub f64);
 
+impl Num {
+    /// Whether `x` is written with an exponent.
+    fn needs_exponent(x: f64) -> bool {
+        let a = x.abs();
+        a.is_finite() && (a >= 1e16 || (a > 0.0 && a < 1e-5))
+    }
+}
+
 impl std::fmt::Display for Num {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let a = self.0.abs();
-        let exponent = a.is_finite() && (a >= 1e16 || (a > 0.0 && a < 1e-5));
-        match (exponent, f.precision()) {
+        match (Self::needs_exponent(self.0), f.precision()) {
             (true, Some(p)) => write!(f, "{:.*e}", p, self.0),
             (true, None) => write!(f, "{:e}", self.0),
             (false, Some(p)) => write!(f, "{:.*}", p, self.0),

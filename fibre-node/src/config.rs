@@ -4,12 +4,12 @@
 //!
 //! Every refusal names the dotted path (`fibre.N.key`), the value and what was expected;
 //! nothing panics on any input.
-use crate::fibre_table::{validate_fibre, RawFibre};
+use crate::fibre_table::{non_negative, validate_fibre, RawFibre};
 use crate::spm_exchange::SmoothedProfile;
 use cosim::profile::{DEFAULT_CUTOFF_OVER_XI, DEFAULT_FPD_INTERFACE_RATIO, DEFAULT_XI};
 use cosim::scene_keys::{
     self, describe_value as describe_toml, deserialize_at as deserialize, number as toml_number,
-    Num,
+    positive,
 };
 
 /// Which fibre model a `[[fibre]]` table asks for.
@@ -476,18 +476,11 @@ fn stiffness_from_group(
     }
     // K = 0 is S2023's freely jointed limit (section IV A: 0 <= K < infinity); a bond needs
     // a stiffness.
+    let path = format!("{p}.{key}");
     match group {
-        FibreGroup::Bending if !(x.is_finite() && x >= 0.0) => {
-            return Err(format!("{p}.{key}: expected a number >= 0, got {}", Num(x)));
-        }
-        FibreGroup::Stretch if !(x.is_finite() && x > 0.0) => {
-            return Err(format!(
-                "{p}.{key}: expected a positive number, got {}",
-                Num(x)
-            ));
-        }
-        _ => {}
-    }
+        FibreGroup::Bending => non_negative(&path, x)?,
+        FibreGroup::Stretch => positive(&path, x)?,
+    };
     let shear = shear_flow(table, &format!("{p}.{key}"))?;
     Ok(group.stiffness(x, shear, f))
 }

@@ -55,11 +55,7 @@ struct RawLoad {
     torque: Option<[f64; 3]>,
 }
 
-fn fmt_vec(v: &[f64; 3]) -> String {
-    Nums(v).to_string()
-}
-
-fn non_negative(path: &str, v: f64) -> Result<f64, String> {
+pub(crate) fn non_negative(path: &str, v: f64) -> Result<f64, String> {
     if v.is_finite() && v >= 0.0 {
         Ok(v)
     } else {
@@ -81,7 +77,7 @@ fn finite_vec(path: &str, v: [f64; 3]) -> Result<[f64; 3], String> {
     } else {
         Err(format!(
             "{path}: expected three finite numbers, got {}",
-            fmt_vec(&v)
+            Nums(&v)
         ))
     }
 }
@@ -90,7 +86,7 @@ fn planar_vec(path: &str, v: [f64; 3], dims: u8) -> Result<[f64; 3], String> {
     if dims == 2 && v[2] != 0.0 {
         Err(format!(
             "{path}: a 2D scene lies in the x-y plane, expected z = 0, got {}",
-            fmt_vec(&v)
+            Nums(&v)
         ))
     } else {
         Ok(v)
@@ -289,7 +285,7 @@ fn placement(p: &str, raw: &RawFibre, dims: u8) -> Result<([f64; 3], [f64; 3]), 
     if !(norm > 0.0 && norm.is_finite()) {
         return Err(format!(
             "{dpath}: expected a non-zero vector, got {}",
-            fmt_vec(&d)
+            Nums(&d)
         ));
     }
     Ok((start, [d[0] / norm, d[1] / norm, d[2] / norm]))
@@ -321,13 +317,13 @@ fn load(
     if dims == 2 && (torque[0] != 0.0 || torque[1] != 0.0) {
         return Err(format!(
             "{lp}.torque: a 2D scene turns only about z, expected [0, 0, tz], got {}",
-            fmt_vec(&torque)
+            Nums(&torque)
         ));
     }
     if model == ModelKind::BeadSpring && torque != [0.0; 3] {
         return Err(format!(
             "{lp}.torque: the bead-spring model has no elastic bead rotation, expected [0, 0, 0], got {}",
-            fmt_vec(&torque)
+            Nums(&torque)
         ));
     }
     Ok(LoadConfig {

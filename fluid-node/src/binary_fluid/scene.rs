@@ -175,7 +175,8 @@ pub fn parse(
         Some(s) if s >= 0.0 => s,
         Some(s) => {
             return Err(format!(
-                "fluid.binary.stabilisation: expected a number >= 0, got {s}"
+                "fluid.binary.stabilisation: expected a number >= 0, got {}",
+                cosim::scene_keys::Num(s)
             ))
         }
         None => DEFAULT_STABILISATION,
