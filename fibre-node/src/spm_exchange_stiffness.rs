@@ -62,6 +62,7 @@ use crate::fibre::Fibre;
 use crate::spm_exchange::ExchangeRatios;
 use crate::stability::{mass_weighted_stiffness_matrix, stable_step, SAFETY as STEP_SAFETY};
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 
 /// The fraction of the profile fluid's excess motion the flow is taken to absorb in one
 /// step (the module's `k`), calibrated on [`MEASURED_THRESHOLDS`].
@@ -467,13 +468,20 @@ impl CoupledModes {
         let grows = |dt: f64| self.growth(dt, damping, share, substeps) > 1.0 + 1e-9;
         let end = (MAX_OMEGA_DT / w).min(below);
         let dx = MAX_OMEGA_DT / SCAN_POINTS as f64 / w;
-        let mut lo = 0.0;
-        while lo < end {
-            let x = (lo + dx).min(end);
-            if grows(x) {
-                return Some(bisect((lo, x), 50, |dt| !grows(dt)).0);
+        // The scan's points, summed as a sequential scan would; their eigenproblems are
+        // independent, so a chunk at a time is evaluated in parallel and the first point
+        // that grows is the one the sequential scan would stop at (same bits).
+        let mut points = vec![0.0];
+        while let Some(&lo) = points.last().filter(|&&lo| lo < end) {
+            points.push((lo + dx).min(end));
+        }
+        let chunk = 4 * rayon::current_num_threads().max(1);
+        for (c, xs) in points[1..].chunks(chunk).enumerate() {
+            let grown: Vec<bool> = xs.par_iter().map(|&x| grows(x)).collect();
+            if let Some(j) = grown.iter().position(|&g| g) {
+                let i = c * chunk + j;
+                return Some(bisect((points[i], points[i + 1]), 50, |dt| !grows(dt)).0);
             }
-            lo = x;
         }
         None
     }
@@ -487,12 +495,14 @@ impl CoupledModes {
         (substeps, share): (usize, f64),
         dt: f64,
     ) -> f64 {
-        (0..9)
+        let growths: Vec<f64> = (0..9)
+            .into_par_iter()
             .map(|j| {
                 let h = dt * (1.0 + (1.0 / SAFETY - 1.0) * j as f64 / 8.0);
                 self.growth(h, damping, share, substeps)
             })
-            .fold(0.0, f64::max)
+            .collect();
+        growths.into_iter().fold(0.0, f64::max)
     }
 }
 
