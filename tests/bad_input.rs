@@ -372,3 +372,48 @@ fn a_fibre_starting_in_a_wall_or_on_another_is_refused() {
         assert!(ok, "{name}: {err}");
     }
 }
+
+/// A scene the nodes refuse changes nothing in `--out`: the earlier run's log, summary and
+/// exported tables stay as they were, and the message does not point at a log. (It used to
+/// replace them with a `failed` summary and an empty log.)
+#[test]
+fn a_refused_scene_leaves_the_earlier_run_in_its_folder() {
+    let p = write_scene("refused-keeps", GOOD);
+    let out = out_dir("refused-keeps");
+    let o = run_command(&p, &out)
+        .args(["--in-process", "--set", "time.steps=20"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let e = coordinator(&["export", out.to_str().unwrap()]);
+    assert!(e.status.success(), "{}", String::from_utf8_lossy(&e.stderr));
+    let files = [
+        "run.mcap",
+        "summary.json",
+        "beads.csv",
+        "diagnostics.csv",
+        "scene.toml",
+    ];
+    let before: Vec<Vec<u8>> = files
+        .iter()
+        .map(|f| std::fs::read(out.join(f)).unwrap())
+        .collect();
+    for layout in [&["--in-process"][..], &[][..]] {
+        let o = run_command(&p, &out)
+            .args(["--set", "fibre.0.youngs_modulu=1"])
+            .args(layout)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success());
+        assert!(err.contains("youngs_modulu"), "{err}");
+        assert!(!err.contains("log written so far"), "{err}");
+        for (f, b) in files.iter().zip(&before) {
+            assert!(
+                std::fs::read(out.join(f)).ok().as_ref() == Some(b),
+                "{f} changed by a refused scene ({layout:?})"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}

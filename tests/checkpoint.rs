@@ -79,6 +79,7 @@ fn a_resumed_spm_run_ends_in_the_same_bits() {
             extra,
         );
         assert_same_end(&a, &b);
+        assert_same_log(&a, &b, 25);
         let part = b.with_file_name(
             b.file_name()
                 .unwrap()
@@ -87,6 +88,32 @@ fn a_resumed_spm_run_ends_in_the_same_bits() {
                 .replace("-resumed-", "-part-"),
         );
         assert_wall_time_adds_up(&b, &part);
+    }
+}
+
+/// A resumed run's log holds the whole run: the earlier run's outputs up to the checkpoint
+/// (copied from its log), then its own. Every logged step of the straight run is there with
+/// the same bits, and one more at the checkpoint's step `at` when that is not an output step
+/// (both runs' last steps are logged).
+fn assert_same_log(straight: &Path, resumed: &Path, at: u64) {
+    for topic in ["/diagnostics", "/fibre/bead_states"] {
+        let read = |d: &Path| read_topic(&d.join("run.mcap"), topic).unwrap();
+        let (a, b) = (read(straight), read(resumed));
+        let b: Vec<_> = b
+            .into_iter()
+            .filter(|m| m["step"] != at || a.iter().any(|x| x["step"] == at))
+            .collect();
+        assert_eq!(
+            b.len(),
+            a.len(),
+            "{topic}: {} messages resumed, {} straight",
+            b.len(),
+            a.len()
+        );
+        assert!(
+            a == b,
+            "{topic}: the resumed log differs from the straight run's"
+        );
     }
 }
 
@@ -127,6 +154,7 @@ fn a_resumed_capillary_run_ends_in_the_same_bits() {
         &["--in-process"],
     );
     assert_same_end(&a, &b);
+    assert_same_log(&a, &b, 17);
 }
 
 /// A fibre alone: `min_end_to_end_over_length` reads the history from before the checkpoint
@@ -146,6 +174,7 @@ fn a_resumed_fibre_run_keeps_its_history() {
         &["--in-process"],
     );
     assert_same_end(&a, &b);
+    assert_same_log(&a, &b, 250);
 }
 
 /// An FPD lattice (populations saved, viscosity and force fields rebuilt from the beads) with
@@ -163,6 +192,7 @@ fn a_resumed_fpd_run_ends_in_the_same_bits() {
             &[],
         );
         assert_same_end(&a, &b);
+        assert_same_log(&a, &b, 23);
     }
 }
 

@@ -1,12 +1,22 @@
-//! Ctrl-C (SIGINT to the coordinator) ends a run cleanly: the nodes are shut down, the summary
-//! says `interrupted`, and the MCAP log is complete and readable.
+//! Ctrl-C (SIGINT to the coordinator), or SIGTERM (`kill`, `timeout`, a batch system), ends a
+//! run cleanly: the nodes are shut down, the summary says `interrupted`, and the MCAP log is
+//! complete and readable.
 mod common;
 use common::*;
 use coordinator::mcap_log::read_topic;
 
 #[test]
 fn sigint_ends_the_run_cleanly() {
-    let out = out_dir("interrupt");
+    ends_the_run_cleanly("-INT");
+}
+
+#[test]
+fn sigterm_ends_the_run_cleanly() {
+    ends_the_run_cleanly("-TERM");
+}
+
+fn ends_the_run_cleanly(signal: &str) {
+    let out = out_dir(&format!("interrupt{signal}"));
     let cfg = config("cantilever.toml");
     let child = run_command(&cfg, &out)
         .args([
@@ -21,7 +31,7 @@ fn sigint_ends_the_run_cleanly() {
         .spawn()
         .unwrap();
     // Wait until the run is under way (first outputs logged), then interrupt it.
-    let o = interrupt_when_logged(child, &out, 20_000);
+    let o = signal_when_logged(child, &out, 20_000, signal);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("interrupted at step"), "{err}");

@@ -195,12 +195,11 @@ fn run(
 ) -> Result<(), String> {
     let scene = scene::load(config, set).map_err(|e| e.to_string())?;
     let out = &opts.out;
-    let result = runner::run(&scene, opts)
-        .map_err(|e| format!("{e}\n(the log written so far is in {})", out.display()))?;
+    let result = runner::run(&scene, opts).map_err(|e| e.to_string())?;
     print_result(&result.summary, out);
     if result.summary["status"] == "interrupted" {
         return Err(format!(
-            "interrupted at step {} (Ctrl-C); the log and summary so far are in {}",
+            "interrupted at step {} (Ctrl-C or SIGTERM); the log and summary so far are in {}",
             result.summary["steps"],
             out.display()
         ));

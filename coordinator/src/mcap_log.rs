@@ -183,24 +183,7 @@ impl RunLog {
     /// A PNG picture of the fluid at `time` on `/fluid/vorticity`, for Foxglove's image panel.
     pub fn vorticity_picture(&mut self, time: f64, png: &[u8]) -> Result<(), String> {
         use base64::Engine as _;
-        let channel = match self.images {
-            Some(c) => c,
-            None => {
-                let sid = self
-                    .writer
-                    .add_schema(
-                        "foxglove.CompressedImage",
-                        "jsonschema",
-                        IMAGE_SCHEMA.as_bytes(),
-                    )
-                    .map_err(mcap_err)?;
-                let c = self
-                    .writer
-                    .add_channel(sid, "/fluid/vorticity", "json", &BTreeMap::new())
-                    .map_err(mcap_err)?;
-                *self.images.insert(c)
-            }
-        };
+        let channel = self.image_channel()?;
         let stamp =
             json!({ "sec": time.floor() as i64, "nsec": ((time - time.floor()) * 1e9) as i64 });
         let data = base64::engine::general_purpose::STANDARD.encode(png);
@@ -209,6 +192,26 @@ impl RunLog {
             time,
             &json!({ "timestamp": stamp, "frame_id": "fluid", "data": data, "format": "png" }),
         )
+    }
+
+    /// `/fluid/vorticity`, added the first time it is needed.
+    fn image_channel(&mut self) -> Result<u16, String> {
+        if let Some(c) = self.images {
+            return Ok(c);
+        }
+        let sid = self
+            .writer
+            .add_schema(
+                "foxglove.CompressedImage",
+                "jsonschema",
+                IMAGE_SCHEMA.as_bytes(),
+            )
+            .map_err(mcap_err)?;
+        let c = self
+            .writer
+            .add_channel(sid, "/fluid/vorticity", "json", &BTreeMap::new())
+            .map_err(mcap_err)?;
+        Ok(*self.images.insert(c))
     }
 
     pub fn diagnostics(
@@ -239,6 +242,32 @@ impl RunLog {
         )
     }
 
+    /// Write the messages of an earlier log ([`messages_up_to`]) on this log's channels, in
+    /// their order, before anything else of this run but its scene.
+    pub fn copy_earlier(&mut self, messages: &[LoggedMessage]) -> Result<(), String> {
+        for m in messages {
+            let channel = match m.topic.as_str() {
+                "/fibre/bead_states" => self.states,
+                "/fibre/scene" => self.foxglove,
+                "/diagnostics" => self.diagnostics,
+                "/timings" => self.timings,
+                "/fluid/vorticity" => self.image_channel()?,
+                _ => continue,
+            };
+            self.sequence += 1;
+            let header = MessageHeader {
+                channel_id: channel,
+                sequence: self.sequence,
+                log_time: m.log_time,
+                publish_time: m.log_time,
+            };
+            self.writer
+                .write_to_known_channel(&header, &m.data)
+                .map_err(mcap_err)?;
+        }
+        self.flush()
+    }
+
     /// Close the current chunk so everything so far is readable even if the run dies.
     pub fn flush(&mut self) -> Result<(), String> {
         self.writer.flush().map_err(mcap_err)
@@ -256,6 +285,40 @@ impl RunLog {
         self.writer.finish().map_err(mcap_err)?;
         Ok(())
     }
+}
+
+/// A message of a log as it was written: its topic, log time (ns) and JSON bytes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoggedMessage {
+    pub topic: String,
+    pub log_time: u64,
+    pub data: Vec<u8>,
+}
+
+/// The messages of the log at `path` that a run resumed at simulation time `time` does not
+/// write again: the outputs before `time`, and at `time` itself the diagnostics, timings
+/// and pictures (the resumed run logs the bead states of its first step, and its scene).
+/// A log that breaks off gives what it holds before the break.
+pub fn messages_up_to(path: &Path, time: f64) -> Result<Vec<LoggedMessage>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let t = (time.max(0.0) * 1e9).round() as u64;
+    let mut out = Vec::new();
+    for m in mcap::MessageStream::new(&bytes).map_err(mcap_err)? {
+        let Ok(m) = m else { break };
+        let keep = match m.channel.topic.as_str() {
+            "/scene" => false,
+            "/fibre/bead_states" | "/fibre/scene" => m.log_time < t,
+            _ => m.log_time <= t,
+        };
+        if keep {
+            out.push(LoggedMessage {
+                topic: m.channel.topic.clone(),
+                log_time: m.log_time,
+                data: m.data.into_owned(),
+            });
+        }
+    }
+    Ok(out)
 }
 
 /// Read back the messages of one topic as JSON values (used by tests and studies).

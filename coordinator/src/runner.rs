@@ -379,10 +379,12 @@ pub fn run(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError
 fn run_on_this_thread(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError> {
     INTERRUPTED.store(false, Ordering::SeqCst);
     writable_dir(&opts.out)?;
-    remove_stale_outputs(&opts.out, scene.path.as_deref());
     let plan = schedule::plan(scene).map_err(fail)?;
-    let mcap_path = opts.out.join("run.mcap");
-    let mut log = RunLog::create(&mcap_path).map_err(fail)?;
+    // A checkpoint that does not fit the scene is refused before anything changes.
+    let checkpoint = match &opts.resume {
+        Some(dir) => Some(check_resume(scene, dir, scene.scene.time.steps)?),
+        None => None,
+    };
     let started = Instant::now();
 
     let ex = InProcessExchange::new();
@@ -391,21 +393,47 @@ fn run_on_this_thread(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResul
         cosim::ipc::cleanup_stale_resources();
     }
     let prefix = cosim::ipc::new_run_prefix();
-    let mut nodes = match start_nodes(&plan, in_process, &prefix, opts.node_timeout) {
-        Ok(n) => n,
+    let mut nodes = start_nodes(&plan, in_process, &prefix, opts.node_timeout)?;
+    let configured = match describe_and_configure(scene, &plan, &mut nodes) {
+        Ok(c) => c,
         Err(e) => {
-            let _ = log.finish(&json!({ "status": "failed", "error": e.message }));
+            let _ = shutdown_all(nodes);
             return Err(e);
+        }
+    };
+
+    // The nodes accept the scene: only now does the run replace what an earlier run left in
+    // --out (a refused scene leaves it as it was). A resumed run's log starts with the
+    // earlier log's steps up to the checkpoint, read before run.mcap is replaced.
+    let mcap_path = opts.out.join("run.mcap");
+    let earlier = match (&opts.resume, &checkpoint) {
+        (Some(dir), Some(ck)) => earlier_log(dir, ck.time),
+        _ => None,
+    };
+    remove_stale_outputs(&opts.out, scene.path.as_deref());
+    let mut log = match RunLog::create(&mcap_path) {
+        Ok(log) => log,
+        Err(e) => {
+            let _ = shutdown_all(nodes);
+            return Err(fail(e));
         }
     };
 
     let mut state = RunState {
         started: Some(started),
         wall_before: Some(0.0),
+        configured,
         ..RunState::default()
     };
     let outcome = drive(
-        scene, opts, &plan, &mut nodes, in_process, &prefix, &mut log, &mut state,
+        scene,
+        opts,
+        &plan,
+        (&mut nodes, checkpoint, earlier.as_deref()),
+        in_process,
+        &prefix,
+        &mut log,
+        &mut state,
     );
     let shutdown = shutdown_all(nodes);
 
@@ -428,7 +456,10 @@ fn run_on_this_thread(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResul
         ))
     })?;
     if let Some(e) = error {
-        return Err(fail(e));
+        return Err(fail(format!(
+            "{e}\n(the log written so far is in {})",
+            opts.out.display()
+        )));
     }
     Ok(RunResult {
         summary,
@@ -560,13 +591,16 @@ fn drive(
     scene: &LoadedScene,
     opts: &RunOptions,
     plan: &Plan,
-    nodes: &mut [Node],
+    (nodes, checkpoint, earlier): (
+        &mut [Node],
+        Option<crate::checkpoint::RunCheckpoint>,
+        Option<&[crate::mcap_log::LoggedMessage]>,
+    ),
     in_process: Option<&InProcessExchange>,
     prefix: &str,
     log: &mut RunLog,
     st: &mut RunState,
 ) -> Result<&'static str, RunError> {
-    st.configured = describe_and_configure(scene, plan, nodes)?;
     let owner = phase_owners(plan, nodes)?;
     st.effects = plan.effects(&st.configured.effects);
     let schedule_names: Vec<String> = plan.schedule.iter().map(|p| p.name().to_string()).collect();
@@ -575,6 +609,9 @@ fn drive(
     }
     log.scene(&scene.toml, &st.effects, &schedule_names)
         .map_err(fail)?;
+    if let Some(messages) = earlier {
+        log.copy_earlier(messages).map_err(fail)?;
+    }
 
     let mut exchange =
         links::coordinator_exchange(in_process, prefix).map_err(|e| fail(e.to_string()))?;
@@ -597,7 +634,7 @@ fn drive(
         mut trajectory,
         resumed,
     } = start(
-        scene,
+        checkpoint,
         opts,
         nodes,
         (&mut *exchange, log),
@@ -767,7 +804,7 @@ struct Start {
 /// Read the first bead states and log them; a resumed run takes its step, time, trajectory
 /// and overlap watches from the checkpoint (`--resume`), a fresh one starts its trajectory.
 fn start(
-    scene: &LoadedScene,
+    checkpoint: Option<crate::checkpoint::RunCheckpoint>,
     opts: &RunOptions,
     nodes: &mut [Node],
     (exchange, log): (&mut dyn cosim::Exchange, &mut RunLog),
@@ -776,9 +813,9 @@ fn start(
 ) -> Result<Start, RunError> {
     let mut states: Vec<BeadState> = Vec::new();
     let mut trajectory = crate::trajectory::Trajectory::default();
-    let resumed = match &opts.resume {
-        Some(dir) => Some(resume(scene, dir, nodes, scene.scene.time.steps)?),
-        None => None,
+    let resumed = match (&opts.resume, checkpoint) {
+        (Some(dir), Some(ck)) => Some(restore(dir, ck, nodes)?),
+        _ => None,
     };
     let first_step = resumed.as_ref().map_or(0, |ck| ck.step);
     if let Some(ck) = &resumed {
@@ -1179,11 +1216,10 @@ fn save_checkpoint(
     crate::checkpoint::write(dir, run, &saved).map_err(fail)
 }
 
-/// Read the checkpoint in `dir`, check it fits this scene, and restore every node from it.
-fn resume(
+/// Read the checkpoint in `dir` and check that it fits this scene.
+fn check_resume(
     scene: &LoadedScene,
     dir: &Path,
-    nodes: &mut [Node],
     steps: u64,
 ) -> Result<crate::checkpoint::RunCheckpoint, RunError> {
     let ck = crate::checkpoint::read_run(dir).map_err(fail)?;
@@ -1195,6 +1231,23 @@ fn resume(
             ck.step
         )));
     }
+    Ok(ck)
+}
+
+/// The log of the run that wrote the checkpoint in `dir` (its run directory's `run.mcap`)
+/// up to the checkpoint's time `time`, to open the resumed run's log; `None` where there is
+/// none to read (it was moved, or never written).
+fn earlier_log(dir: &Path, time: f64) -> Option<Vec<crate::mcap_log::LoggedMessage>> {
+    let path = dir.parent()?.join("run.mcap");
+    crate::mcap_log::messages_up_to(&path, time).ok()
+}
+
+/// Restore every node from the checkpoint `ck` in `dir` (see [`check_resume`]).
+fn restore(
+    dir: &Path,
+    ck: crate::checkpoint::RunCheckpoint,
+    nodes: &mut [Node],
+) -> Result<crate::checkpoint::RunCheckpoint, RunError> {
     for n in nodes.iter_mut() {
         let name = n.link.name().to_string();
         let state = crate::checkpoint::read_node(dir, &ck, &name).map_err(fail)?;

@@ -144,6 +144,16 @@ pub fn run_scene(
 /// Wait until the run writing into `out` is under way (its MCAP log has reached `bytes`,
 /// within 60 s), then send the coordinator `child` SIGINT (Ctrl-C) and collect its output.
 pub fn interrupt_when_logged(child: std::process::Child, out: &Path, bytes: u64) -> Output {
+    signal_when_logged(child, out, bytes, "-INT")
+}
+
+/// [`interrupt_when_logged`] with the signal `signal` (`kill`'s option: `-INT`, `-TERM`).
+pub fn signal_when_logged(
+    child: std::process::Child,
+    out: &Path,
+    bytes: u64,
+    signal: &str,
+) -> Output {
     let t0 = std::time::Instant::now();
     while std::fs::metadata(out.join("run.mcap")).map_or(0, |m| m.len()) < bytes {
         assert!(
@@ -154,7 +164,7 @@ pub fn interrupt_when_logged(child: std::process::Child, out: &Path, bytes: u64)
     }
     let pid = child.id().to_string();
     assert!(Command::new("kill")
-        .args(["-INT", &pid])
+        .args([signal, &pid])
         .status()
         .unwrap()
         .success());
