@@ -481,7 +481,7 @@ impl Component for FibreComponent {
                 param("fibre.N.beads", "1", None, "number of beads N_b (1: a single rigid particle)"),
                 param("fibre.N.bead_radius", len, None, "bead radius r_b"),
                 param("fibre.N.youngs_modulus", "mass / (length time^2)", None, "Young's modulus E; EI with I = pi r_b^4 / 4"),
-                param("fibre.N.shear_modulus", "mass / (length time^2)", Some("E / 2.6"), "shear modulus G (torsion, cohesive beam in 3D); default E / (2 (1 + 0.3))"),
+                param("fibre.N.shear_modulus", "mass / (length time^2)", Some("E / 2.6"), "shear modulus G (torsion, cohesive beam in 3D); the default is E / (2 (1 + nu)) with Poisson's ratio nu = 0.3"),
                 param("fibre.N.density", "mass / length^3", Some("1.0"), "bead density; 3D sphere m = rho 4/3 pi r^3, 2D disc of unit thickness m = rho pi r^2"),
                 param("fibre.N.start", len, Some("[0.0, 0.0, 0.0]"), "position of bead 0"),
                 param("fibre.N.centred", "1", Some("false"), "true: start such that the fibre's midpoint lies at the centre of the gap between the walls, y = (ny - 1) / 2, x = nx / 2 (z = nz / 2), as S2023 place it; excludes start"),
@@ -595,6 +595,16 @@ impl Component for FibreComponent {
         let effects = active_effects(&fibres);
         for (n, f) in fibres.iter().enumerate() {
             notes.extend(fibre_setup::rollers_note(n, f, scene.coupling));
+        }
+        if scene.coupling == Coupling::None {
+            // With a fluid, the fluid node checks the start against its walls and box.
+            let starts: Vec<(&[Vec3], f64)> = fibres
+                .iter()
+                .zip(&scene.fibres)
+                .map(|(f, cfg)| (&f.pos[..], cfg.bead_radius))
+                .collect();
+            crate::fibre_overlap::check_start(&starts, scene.dimensions as usize)
+                .map_err(|e| ComponentError(format!("fibre-node: the fibres' start: {e}")))?;
         }
         let mut run = Run::new(scene, fibres);
         run.publish(0, Port::BeadStates, exchange)?;

@@ -531,7 +531,6 @@ fn spm_start_check(grid: Grid, spm: &Spm, cfg: &FluidConfig, radii: Vec<f64>) ->
             walls: spm.walls().map(|w| WallFaces {
                 bottom: w.faces[0],
                 top: w.faces[1],
-                wrap_y: true,
             }),
         },
         beads_per_fibre: cfg.fibres.iter().map(|f| f.beads).collect(),

@@ -458,11 +458,7 @@ fn start_check(scene: &FpdScene, total_beads: usize) -> StartCheck {
             periodic: [true, scene.walls.is_none(), false],
             walls: scene.walls.map(|_| {
                 let [bottom, top] = cosim::scene_keys::bounce_back_faces(scene.ny as f64);
-                WallFaces {
-                    bottom,
-                    top,
-                    wrap_y: false,
-                }
+                WallFaces { bottom, top }
             }),
         },
         beads_per_fibre: scene.beads.clone(),

@@ -9,6 +9,7 @@
 
 use std::collections::HashMap;
 
+use cosim::scene_keys::Num;
 use cosim::BeadState;
 
 /// Relative slack on every distance comparison, so that beads placed exactly touching (a
@@ -35,9 +36,6 @@ pub struct WallFaces {
     pub bottom: f64,
     /// y of the top wall's face (the fluid lies below it).
     pub top: f64,
-    /// Whether a bead's y wraps modulo the box (SPM: the slabs sit inside a periodic box and
-    /// meet at y = -1/2 = ny - 1/2); otherwise y is taken as given (FPD's lattice walls).
-    pub wrap_y: bool,
 }
 
 /// Check the beads' first positions: each bead clear of the walls, no two fibres
@@ -119,29 +117,30 @@ fn wall_clearance(
     r: f64,
     y: f64,
 ) -> Result<(), String> {
-    let yw = if w.wrap_y {
-        (y + 0.5).rem_euclid(ny) - 0.5
-    } else {
-        y
-    };
+    // y is taken as given, not modulo the box: SPM's slabs sit in a periodic box, but the
+    // fibre node's wall contact and overlap watch measure from the faces as they are.
     let slack = SLACK * r.max(1.0);
-    let (side, face) = if yw - r < w.bottom - slack {
+    let (side, face) = if y - r < w.bottom - slack {
         ("bottom", w.bottom)
-    } else if yw + r > w.top + slack {
+    } else if y + r > w.top + slack {
         ("top", w.top)
     } else {
         return Ok(());
     };
-    let wrapped = if yw != y {
-        format!(" (y = {y} in the periodic box)")
+    let beyond = if !(-0.5..ny - 0.5).contains(&y) {
+        format!(
+            ", outside the box (y from -0.5 to {}; walls do not wrap)",
+            ny - 0.5
+        )
     } else {
         String::new()
     };
     Err(format!(
-        "fibre {f} bead {k} starts at y = {yw}{wrapped} with radius {r}: it reaches into the \
+        "fibre {f} bead {k} starts at y = {}{beyond} with radius {r}: it reaches into the \
          {side} wall, whose face is at y = {face}. The fluid lies between y = {} and {}, so a \
          bead's centre must start between {} and {}; move fibre.{f}.start (or change \
          fibre.{f}.direction or fibre.{f}.beads)",
+        Num(y),
         w.bottom,
         w.top,
         w.bottom + r,
@@ -295,7 +294,6 @@ mod tests {
             walls: Some(WallFaces {
                 bottom: 3.5,
                 top: 91.5,
-                wrap_y: true,
             }),
         }
     }
@@ -337,15 +335,23 @@ mod tests {
     }
 
     #[test]
-    fn slab_walls_wrap_y_but_lattice_walls_do_not() {
+    fn walls_do_not_wrap_y() {
         let b = slab_box();
-        // y = -50 is y = 46 in the periodic box: mid-gap.
-        assert_eq!(check(&b, &[1], &[4.0], &[[10.0, -50.0, 0.0]]), Ok(()));
+        // y = -50 would be y = 46 in the periodic box, mid-gap, but the fibre node's wall
+        // contact and overlap watch take y as it is.
+        let e = check(&b, &[1], &[4.0], &[[10.0, -50.0, 0.0]]).unwrap_err();
+        assert!(e.contains("y = -50, outside the box"), "{e}");
+        assert!(e.contains("bottom wall"), "{e}");
+        let e = check(&b, &[1], &[4.0], &[[10.0, 500.0, 0.0]]).unwrap_err();
+        assert!(
+            e.contains("y = 500, outside the box (y from -0.5 to 95.5"),
+            "{e}"
+        );
+        assert!(e.contains("top wall"), "{e}");
         let lattice = StartBox {
             walls: Some(WallFaces {
                 bottom: -0.5,
                 top: 199.5,
-                wrap_y: false,
             }),
             periodic: [true, false, false],
             size: [100.0, 200.0, 1.0],
