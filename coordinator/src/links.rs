@@ -32,7 +32,11 @@ fn refused(node: &str, reply: Reply) -> Result<Reply, LinkFailure> {
     match reply {
         Reply::Error(message) => Err(LinkFailure::Refused {
             node: node.to_string(),
-            message,
+            // Nodes name themselves in their messages (for a node run alone); the failure
+            // names the node already.
+            message: message
+                .strip_prefix(&format!("{node}: "))
+                .map_or(message.clone(), str::to_string),
         }),
         r => Ok(r),
     }

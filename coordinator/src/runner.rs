@@ -710,10 +710,22 @@ fn drive(
         st.time = (step + 1) as f64 * dt;
         if let Some((k, v)) = report.iter().find(|(_, v)| !v.is_finite()) {
             log.diagnostics(step + 1, st.time, &report).map_err(fail)?;
+            let limits: Vec<String> = st
+                .configured
+                .time_step_limits
+                .iter()
+                .map(|(name, dt)| format!("{name} {}", cosim::scene_keys::Sig(*dt)))
+                .collect();
             return Err(fail(format!(
-                "the run became unstable at step {}: {k} = {v}; lower time.dt (limits: {:?})",
+                "the run became unstable at step {}: {k} = {v}; where the flow or the fibres \
+                 diverged, lower time.dt = {} (its limits: {})",
                 step + 1,
-                st.configured.time_step_limits
+                cosim::scene_keys::Sig(dt),
+                if limits.is_empty() {
+                    "none known".to_string()
+                } else {
+                    limits.join(", ")
+                }
             )));
         }
         st.watches.observe(step + 1, &report);

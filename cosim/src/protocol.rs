@@ -161,8 +161,10 @@ pub struct Configured {
     pub effects: Vec<String>,
     /// Stability limits the node derived, by name, in the scene's time unit
     /// (e.g. `("beam stiffness", 0.21)`), already compared against `time.dt`.
+    #[serde(with = "named_values")]
     pub time_step_limits: Vec<(String, f64)>,
     /// Dimensionless numbers and derived quantities worth reporting, by name.
+    #[serde(with = "named_values")]
     pub derived: Vec<(String, f64)>,
     /// Advice for the user on a scene the node runs but may resolve poorly (not an error):
     /// printed before the run and by `coordinator check`, kept in the summary.
@@ -173,6 +175,7 @@ pub struct Configured {
 /// What a node reports after one phase: scalar diagnostics by name, in a fixed order.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 pub struct PhaseReport {
+    #[serde(with = "named_values")]
     pub diagnostics: Vec<(String, f64)>,
     /// [`Detail::Brief`] if the node left diagnostics out; a node that always reports in full
     /// says [`Detail::Full`] whatever it was asked.
@@ -198,6 +201,75 @@ impl Reply {
     }
 }
 
+/// Named numbers across the link. JSON has no NaN or infinity (serde_json would write null,
+/// which then fails to read as a number): a value that is not finite (a diverged
+/// diagnostic, an unbounded limit) crosses as the string `"NaN"`, `"inf"` or `"-inf"`, and
+/// a null reads as NaN. Finite values are written as before, to the last bit.
+mod named_values {
+    use serde::de::{self, Deserializer, Visitor};
+    use serde::ser::Serializer;
+    use serde::{Deserialize, Serialize};
+
+    struct Wire(f64);
+
+    impl Serialize for Wire {
+        fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+            let x = self.0;
+            if x.is_finite() {
+                s.serialize_f64(x)
+            } else if x.is_nan() {
+                s.serialize_str("NaN")
+            } else if x > 0.0 {
+                s.serialize_str("inf")
+            } else {
+                s.serialize_str("-inf")
+            }
+        }
+    }
+
+    impl<'de> Deserialize<'de> for Wire {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            struct V;
+            impl Visitor<'_> for V {
+                type Value = Wire;
+                fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                    f.write_str("a number, \"NaN\", \"inf\" or \"-inf\"")
+                }
+                fn visit_f64<E: de::Error>(self, x: f64) -> Result<Wire, E> {
+                    Ok(Wire(x))
+                }
+                fn visit_i64<E: de::Error>(self, x: i64) -> Result<Wire, E> {
+                    Ok(Wire(x as f64))
+                }
+                fn visit_u64<E: de::Error>(self, x: u64) -> Result<Wire, E> {
+                    Ok(Wire(x as f64))
+                }
+                fn visit_unit<E: de::Error>(self) -> Result<Wire, E> {
+                    Ok(Wire(f64::NAN))
+                }
+                fn visit_str<E: de::Error>(self, v: &str) -> Result<Wire, E> {
+                    match v {
+                        "NaN" => Ok(Wire(f64::NAN)),
+                        "inf" => Ok(Wire(f64::INFINITY)),
+                        "-inf" => Ok(Wire(f64::NEG_INFINITY)),
+                        _ => Err(E::invalid_value(de::Unexpected::Str(v), &self)),
+                    }
+                }
+            }
+            d.deserialize_any(V)
+        }
+    }
+
+    pub fn serialize<S: Serializer>(values: &[(String, f64)], s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(values.iter().map(|(k, x)| (k, Wire(*x))))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<(String, f64)>, D::Error> {
+        let wire: Vec<(String, Wire)> = Vec::deserialize(d)?;
+        Ok(wire.into_iter().map(|(k, w)| (k, w.0)).collect())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -218,6 +290,33 @@ mod tests {
             last: None,
         };
         assert!((0..20).all(|s| zero.detail(s) == Detail::Full));
+    }
+
+    /// A diagnostic that is not finite crosses the link (JSON has no NaN): NaN, inf and
+    /// -inf come back as they went, finite values to the last bit, and a null reads as NaN.
+    #[test]
+    fn values_that_are_not_finite_cross_the_link() {
+        let report = PhaseReport {
+            diagnostics: vec![
+                ("a".into(), f64::NAN),
+                ("b".into(), f64::INFINITY),
+                ("c".into(), f64::NEG_INFINITY),
+                ("d".into(), 0.1 + 0.2),
+                ("e".into(), -0.0),
+            ],
+            detail: Detail::Full,
+        };
+        let back: PhaseReport =
+            serde_json::from_slice(&serde_json::to_vec(&report).unwrap()).unwrap();
+        let bits = |r: &PhaseReport| -> Vec<u64> {
+            r.diagnostics.iter().map(|(_, x)| x.to_bits()).collect()
+        };
+        assert!(back.diagnostics[0].1.is_nan());
+        assert_eq!(bits(&back)[1..], bits(&report)[1..]);
+        let r: PhaseReport =
+            serde_json::from_str(r#"{"diagnostics":[["a",null],["b",2]]}"#).unwrap();
+        assert!(r.diagnostics[0].1.is_nan() && r.diagnostics[1].1 == 2.0);
+        assert!(serde_json::from_str::<PhaseReport>(r#"{"diagnostics":[["a","x"]]}"#).is_err());
     }
 
     /// Commands and reports without the detail fields read as full reports.

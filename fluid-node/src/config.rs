@@ -541,6 +541,7 @@ viscosity = 0.5
             ("[fluid.binary]\ninitial = \"flat\"\nposition = 12\nradius = 3", "fluid.binary.radius: does not apply to initial = \"flat\""),
             ("[fluid.binary]\ninitial = \"flat\"\nposition = 12\nnormal = [1, 1]", "fluid.binary.normal: expected an axis 0 or 1, or a vector along x or y"),
             ("[fluid.binary]\ninitial = \"droplet\"\ncentre = [1, 2]", "fluid.binary.radius: required with initial = \"droplet\""),
+            ("[fluid.binary]\ninitial = \"droplet\"\ncentre = [1, 2]\nradius = 100", "fluid.binary.radius: expected less than half the smallest box length"),
             ("[fluid.binary]\ninitial = \"flat\"\nposition = 12\npeclet = 1", "fluid.binary.peclet: needs the velocity scale U0"),
             ("[fluid.binary]\ninitial = \"flat\"\nposition = 12\ne0 = 1\nsigma = 2", "fluid.binary.sigma: give either e0 or sigma"),
             ("[fluid.binary]\ninitial = \"bubble\"", "fluid.binary.initial: expected \"flat\", \"droplet\" or \"half-droplet\", got \"bubble\""),

@@ -2,7 +2,7 @@
 //! (L2020 sections 2.4, 3) and the initial order parameter. Grid units (spacing 1); time in
 //! the scene's unit. Every refusal names the dotted key, the value and what was expected.
 use crate::cahn_hilliard::{self, CahnHilliardConfig, Fluid, Scheme};
-use cosim::scene_keys::{describe_value as describe_toml, positive};
+use cosim::scene_keys::{describe_value as describe_toml, positive, Num};
 use std::f64::consts::SQRT_2;
 
 /// Keys of `[fluid.binary]`.
@@ -298,6 +298,18 @@ impl Table<'_> {
         }
         let centre = self.required("centre", self.vector("centre", dims)?, &kind)?;
         let radius = self.required("radius", self.positive("radius")?, &kind)?;
+        // A droplet as wide as the periodic box touches its own image: a band, not a drop.
+        let box_min = grid[..dims].iter().copied().min().unwrap_or(0) as f64;
+        if radius >= 0.5 * box_min {
+            return Err(format!(
+                "fluid.binary.radius: expected less than half the smallest box length \
+                 ({} of fluid.grid = {:?}), got {}: the droplet would touch its own periodic \
+                 image",
+                0.5 * box_min,
+                &grid[..dims],
+                Num(radius)
+            ));
+        }
         if kind == "droplet" {
             return Ok(InitialPsi::Droplet {
                 centre,
