@@ -200,8 +200,9 @@ fn stiff_fibre_in_shear_without_internal_damping_is_refused_before_step_0() {
     ] {
         assert!(e.contains(s), "{s:?} missing from: {e}");
     }
-    // Refused before step 0: no step was taken.
-    assert_eq!(summary(&run_dir(name))["steps"], 0);
+    // Refused before step 0: no step was taken, and nothing was written into --out.
+    let dir = run_dir(name);
+    assert!(!dir.join("summary.json").exists() && !dir.join("run.mcap").exists());
 }
 
 /// The same undamped chain with the implicit exchange (`fibre.0.exchange = "implicit"`,

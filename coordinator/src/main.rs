@@ -332,9 +332,14 @@ fn print_result(summary: &serde_json::Value, out: &std::path::Path) {
                     Some(label) => {
                         println!("  {name} = {label} ({})", v["note"].as_str().unwrap_or(""))
                     }
-                    None => match v["value"].as_f64() {
-                        Some(x) => println!("  {name} = {}", Sig(x)),
-                        None => println!("  {name} = {}", v["value"]),
+                    None => match (v["value"].as_f64(), v["note"].as_str()) {
+                        (Some(x), _) => println!("  {name} = {}", Sig(x)),
+                        // No value (JSON null): the note says why (a fibre not stuck, no
+                        // complete half-turn).
+                        (None, Some(note)) if !note.is_empty() => {
+                            println!("  {name}: none ({note})")
+                        }
+                        (None, _) => println!("  {name} = {}", v["value"]),
                     },
                 },
             }

@@ -19,7 +19,7 @@
 //! (`fluid.confinement`, `fluid.particle_shear_reynolds`), so a rounded gap shows there.
 
 use crate::metrics::number;
-use cosim::scene_keys::{positive, Num};
+use cosim::scene_keys::{positive, Num, Sig};
 
 /// The FPD fluid's default density (`fluid.density` absent), as the fluid node reads it.
 const DEFAULT_DENSITY: f64 = 1.0;
@@ -237,6 +237,17 @@ fn set_gap(
             Num(exact)
         ));
     }
+    // The fluid's smallest grid, named here rather than as a fluid.grid the user never set.
+    let min_rows = fluid_node::config::MIN_GRID as f64;
+    if ny < min_rows {
+        return Err(format!(
+            "fluid.confinement = {}: the gap l_c / C = {} (l_c = {lc}) makes fluid.grid = \
+             [{nx}, {ny}], below the fluid's {min_rows} rows; expected C at most {}",
+            Num(c),
+            Num(exact),
+            Sig(round_down(lc / (min_rows - margin - 0.5)))
+        ));
+    }
     fluid.insert(
         "grid".into(),
         toml::Value::Array(vec![nx.clone(), toml::Value::Integer(ny as i64)]),
@@ -258,6 +269,12 @@ fn set_gap(
         ));
     }
     Ok(())
+}
+
+/// `x` rounded down to six significant digits, so that a limit quoted in a message passes.
+fn round_down(x: f64) -> f64 {
+    let p = 10f64.powi(x.abs().log10().floor() as i32 - 5);
+    (x / p).floor() * p
 }
 
 /// Without `fluid.confinement` the scene's own fluid.grid = [nx, ny, ..] must leave a gap

@@ -135,6 +135,11 @@ impl Vary {
             (None, false) => self.keys.clone(),
             _ => return Err(format!("vary.{i}: give either `key` or `keys`")),
         };
+        if self.values.is_empty() {
+            return Err(format!(
+                "vary.{i}.values: expected at least one value (an empty list makes no variants)"
+            ));
+        }
         self.values
             .iter()
             .enumerate()
@@ -541,7 +546,8 @@ fn variant_summary(
             message: format!("--replot: {e}"),
         }),
         Runs::Parallel { .. } => {
-            // A run that failed still writes its summary (status `failed`, the error).
+            // A run that failed after step 0 writes its summary (status `failed`, the
+            // error); one refused before writes none, and its log's last line says why.
             read_summary(&run_dir.join("summary.json"))
                 .map_err(|e| runner::RunError {
                     message: format!("{e}; its log ends: {}", last_log_line(&run_dir)),
@@ -813,6 +819,14 @@ mod tests {
         assert_eq!(v.label_keys(0).unwrap(), ["fluid.confinement"]);
         let v = vary("key = \"fibre.0.bending_number\"\nvalues = [3.3, 3.3]");
         assert_eq!(v.label_keys(0).unwrap(), ["fibre.0.bending_number"]);
+        // An empty list would make a study of no variants, which "passes" doing nothing.
+        let e = vary("key = \"fibre.0.beads\"\nvalues = []")
+            .label_keys(2)
+            .unwrap_err();
+        assert!(
+            e.starts_with("vary.2.values: expected at least one value"),
+            "{e}"
+        );
     }
 
     /// A `[curve]` adds its abscissa as a column of the table and as the CSV's last column;
