@@ -603,7 +603,7 @@ impl Component for FibreComponent {
                 .zip(&scene.fibres)
                 .map(|(f, cfg)| (&f.pos[..], cfg.bead_radius))
                 .collect();
-            crate::fibre_overlap::check_start(&starts, scene.dimensions as usize)
+            crate::fibre_overlap::check_coincident(&starts)
                 .map_err(|e| ComponentError(format!("fibre-node: the fibres' start: {e}")))?;
         }
         let mut run = Run::new(scene, fibres);
