@@ -114,6 +114,16 @@ fn bead_and_diagnostic_tables_equal_the_log() {
         .map(|l| serde_json::from_str(l).unwrap())
         .collect();
     assert_eq!(lines, diagnostics);
+    // A misspelt topic is answered with the log's topics.
+    let o = coordinator(&["export", out.to_str().unwrap(), "--topic", "/diagnostic"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("no messages on /diagnostic (its topics: ")
+            && err.contains("/diagnostics")
+            && err.contains("/fibre/bead_states"),
+        "{err}"
+    );
 
     // A log cut short (a killed run never writes the footer): what came before the break.
     let cut = out.join("cut");
@@ -131,6 +141,15 @@ fn bead_and_diagnostic_tables_equal_the_log() {
         partial.len()
     );
     assert_eq!(partial[..], beads[..partial.len()]);
+
+    // A file that is not MCAP says so.
+    let fake = out.join("fake");
+    std::fs::create_dir_all(&fake).unwrap();
+    std::fs::write(fake.join("run.mcap"), b"step,time\n1,2\n").unwrap();
+    let o = coordinator(&["export", fake.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("is not an MCAP file"), "{err}");
 
     // Not a run: a clear error, no panic.
     let o = coordinator(&["export", cut.join("nothing").to_str().unwrap()]);

@@ -278,7 +278,12 @@ fn export_run(
             use std::io::Write;
             let (messages, damage) = coordinator::mcap_log::salvage_topic(&log, topic)?;
             if messages.is_empty() && damage.is_none() {
-                return Err(format!("{} has no messages on {topic}", log.display()));
+                let have = coordinator::mcap_log::topics(&log)?;
+                return Err(format!(
+                    "{} has no messages on {topic} (its topics: {})",
+                    log.display(),
+                    have.join(", ")
+                ));
             }
             let mut stdout = std::io::stdout().lock();
             for m in messages {

@@ -300,7 +300,7 @@ pub struct LoggedMessage {
 /// and pictures (the resumed run logs the bead states of its first step, and its scene).
 /// A log that breaks off gives what it holds before the break.
 pub fn messages_up_to(path: &Path, time: f64) -> Result<Vec<LoggedMessage>, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let bytes = read_log(path)?;
     let t = (time.max(0.0) * 1e9).round() as u64;
     let mut out = Vec::new();
     for m in mcap::MessageStream::new(&bytes).map_err(mcap_err)? {
@@ -316,6 +316,32 @@ pub fn messages_up_to(path: &Path, time: f64) -> Result<Vec<LoggedMessage>, Stri
                 log_time: m.log_time,
                 data: m.data.into_owned(),
             });
+        }
+    }
+    Ok(out)
+}
+
+/// The bytes of the log at `path`, refused unless they start as an MCAP file does.
+fn read_log(path: &Path) -> Result<Vec<u8>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    if !bytes.starts_with(mcap::MAGIC) {
+        return Err(format!(
+            "{} is not an MCAP file (it does not start with the MCAP magic bytes)",
+            path.display()
+        ));
+    }
+    Ok(bytes)
+}
+
+/// The topics of the messages in the log at `path`, in the order they first appear (up to
+/// a break, as [`salvage_topics`] reads).
+pub fn topics(path: &Path) -> Result<Vec<String>, String> {
+    let bytes = read_log(path)?;
+    let mut out: Vec<String> = Vec::new();
+    for m in mcap::MessageStream::new(&bytes).map_err(mcap_err)? {
+        let Ok(m) = m else { break };
+        if !out.contains(&m.channel.topic) {
+            out.push(m.channel.topic.clone());
         }
     }
     Ok(out)
@@ -347,7 +373,7 @@ pub fn salvage_topics(
     path: &Path,
     topics: &[&str],
 ) -> Result<(Vec<Vec<serde_json::Value>>, Option<String>), String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let bytes = read_log(path)?;
     let mut out = vec![Vec::new(); topics.len()];
     for m in mcap::MessageStream::new(&bytes).map_err(mcap_err)? {
         let m = match m {
