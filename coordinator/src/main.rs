@@ -327,12 +327,17 @@ fn print_result(summary: &serde_json::Value, out: &std::path::Path) {
     if let Some(m) = summary["metrics"].as_object() {
         for (name, v) in m {
             match (v["reference"].as_f64(), v["relative_error"].as_f64()) {
-                (Some(r), Some(e)) => println!(
-                    "  {name} = {} (reference {}, relative error {:.2} %)",
-                    Sig(v["value"].as_f64().unwrap_or(f64::NAN)),
-                    Sig(r),
-                    100.0 * e
-                ),
+                (Some(r), Some(e)) => {
+                    println!(
+                        "  {name} = {} (reference {}, relative error {:.2} %)",
+                        Sig(v["value"].as_f64().unwrap_or(f64::NAN)),
+                        Sig(r),
+                        100.0 * e
+                    );
+                    if let Some(note) = v["note"].as_str().filter(|n| !n.is_empty()) {
+                        println!("    {note}");
+                    }
+                }
                 _ => match v["label"].as_str() {
                     Some(label) => {
                         println!("  {name} = {label} ({})", v["note"].as_str().unwrap_or(""))

@@ -77,6 +77,10 @@ pub(crate) fn number(v: Option<&toml::Value>) -> Option<f64> {
 /// of the beads (about a second at 10 beads), so longer chains fall back to the 3D law.
 const MAX_STOKES_BEADS: usize = 16;
 
+/// Above this change of a cantilever's length (1 %), the tip metrics note that the
+/// inextensible elastica leaves the stretching out.
+const STRETCH_NOTE: f64 = 0.01;
+
 /// Bretherton constant of fibre 0 as a rigid chain in unbounded 2D Stokes flow
 /// ([`stokes::chain_bretherton`]), for a 2D scene whose fibre 0 is a straight chain of
 /// 2 to [`MAX_STOKES_BEADS`] touching beads; `None` otherwise (3D, beads spaced apart, or a
@@ -649,6 +653,13 @@ fn beam_metrics(
     let axis_vec = sub(xt0, x0);
     let length = norm(axis_vec);
     let axis = scale(axis_vec, 1.0 / length);
+    // The elastica is inextensible; the beams stretch (a strain P / (E A) under the load).
+    let chord_sum = |b: &[BeadState]| {
+        (1..n)
+            .map(|i| norm(sub(b[i].position, b[i - 1].position)))
+            .sum::<f64>()
+    };
+    let strain = chord_sum(last) / chord_sum(initial) - 1.0;
     for name in names {
         let m = match name.as_str() {
             "tip_deflection_over_length" | "tip_rotation" => {
@@ -662,6 +673,15 @@ fn beam_metrics(
                 let alpha = p * length * length / f.bending_rigidity;
                 dimensionless.insert("alpha".into(), alpha);
                 let reference = elastica::tip(alpha);
+                let stretch_note = if strain.abs() > STRETCH_NOTE {
+                    format!(
+                        "the fibre's length changed by {:+.1} %; the elastica is inextensible, so \
+                         the difference includes the stretching",
+                        100.0 * strain
+                    )
+                } else {
+                    String::new()
+                };
                 if name == "tip_rotation" {
                     let value = if f.model == "bead-spring" {
                         // No bead orientation: the slope of the last segment.
@@ -681,6 +701,8 @@ fn beam_metrics(
                         "elastica (REFERENCE.md section 1)",
                     );
                     m.extra.insert("linear_theory".into(), alpha / 2.0);
+                    m.extra.insert("axial_strain".into(), strain);
+                    m.note = stretch_note;
                     m
                 } else {
                     let value = dot(sub(last[n - 1].position, xt0), load_dir) / length;
@@ -691,6 +713,8 @@ fn beam_metrics(
                     );
                     m.extra.insert("linear_theory".into(), alpha / 3.0);
                     m.extra.insert("alpha".into(), alpha);
+                    m.extra.insert("axial_strain".into(), strain);
+                    m.note = stretch_note;
                     m
                 }
             }
