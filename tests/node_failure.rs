@@ -66,3 +66,49 @@ fn an_unresponsive_fibre_node_ends_the_run_after_the_timeout() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "failed");
 }
+
+/// Two fibres that meet with `fibre_contact`, with no fluid and no loads: nothing feeds them
+/// energy. At a time step just under the beam-stiffness limit (0.0113) the contact stiffens
+/// them past it and the integration grows slowly, staying finite (to 5e5 times its energy
+/// in 20 000 steps): the energy watch ends the run as unstable once the energy passes 1000
+/// times its value after step 1. At half the step the same collision keeps its energy within
+/// 10 % and completes (src/energy_watch.rs).
+#[test]
+fn a_closed_fibre_system_that_gains_energy_is_unstable() {
+    let fibre = |start: &str, direction: &str| {
+        format!(
+            "[[fibre]]\nmodel = \"cohesive-beam\"\nbeads = 10\nbead_radius = 1.0\n\
+             youngs_modulus = 1.0e4\ndensity = 1.0\nstart = {start}\ndirection = {direction}\n\
+             fibre_contact = true\nself_contact = true\n"
+        )
+    };
+    let text = format!(
+        "dimensions = 2\n[time]\ndt = 0.01\nsteps = 20000\n[output]\ninterval = 200\n{}{}",
+        fibre("[0.0, 0.0, 0.0]", "[1.0, 0.0, 0.0]"),
+        fibre("[5.0, 0.3, 0.0]", "[0.0, 1.0, 0.0]")
+    );
+    let dir = out_dir("energy-blowup-scene");
+    std::fs::create_dir_all(&dir).unwrap();
+    let cfg = dir.join("scene.toml");
+    std::fs::write(&cfg, text).unwrap();
+
+    let out = out_dir("energy-blowup");
+    let o = run_command(&cfg, &out).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    for needle in ["unstable at step", "energy", "times its value", "time.dt"] {
+        assert!(err.contains(needle), "message lacks `{needle}`: {err}");
+    }
+    let s = summary(&out);
+    assert_eq!(s["status"], "failed");
+    assert!(s["steps"].as_u64().unwrap() < 20000, "{s}");
+
+    let out = run_scene(
+        "energy-stable",
+        &cfg,
+        &["time.dt=0.005".into(), "time.steps=4000".into()],
+        &[],
+    )
+    .expect("the same collision at half the step is stable");
+    assert_eq!(summary(&out)["status"], "completed");
+}

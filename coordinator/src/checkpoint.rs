@@ -41,9 +41,10 @@ pub struct RunCheckpoint {
     #[serde(default)]
     pub wall_seconds: Option<f64>,
     /// The largest `wall_overlap`, `self_overlap` and `fibre_overlap` from step 0 to this
-    /// checkpoint (fields `wall_watch`, `self_watch` and `fibre_watch`).
+    /// checkpoint (fields `wall_watch`, `self_watch` and `fibre_watch`), and the energy a
+    /// closed fibre system started with (`energy_watch`).
     #[serde(flatten)]
-    pub watches: crate::overlap_watch::OverlapWatches,
+    pub watches: crate::overlap_watch::RunWatches,
     /// CRC-32 (IEEE) of each node's state file, by node name, set by [`write()`]; absent in
     /// checkpoints written before it existed, whose states are then read unchecked.
     #[serde(default)]
@@ -82,7 +83,7 @@ impl RunCheckpoint {
         initial: &[BeadState],
         trajectory: &Trajectory,
         wall_seconds: Option<f64>,
-        watches: crate::overlap_watch::OverlapWatches,
+        watches: crate::overlap_watch::RunWatches,
     ) -> Self {
         Self {
             format: FORMAT.into(),
@@ -244,12 +245,13 @@ mod tests {
 
     /// The largest overlaps travel with the checkpoint (the resumed summary's
     /// `largest_wall_overlap`, `largest_self_overlap` and `largest_fibre_overlap` are over
-    /// both pieces); an older
-    /// checkpoint without them reads as clear.
+    /// both pieces), and so does the energy reference of a closed fibre system (a resumed
+    /// run judges a blow-up as the uninterrupted run would); an older checkpoint without them
+    /// reads as clear.
     #[test]
-    fn the_largest_overlaps_are_kept_across_a_resume() {
-        use crate::overlap_watch::{OverlapWatch, OverlapWatches};
-        let watches = OverlapWatches {
+    fn the_watches_are_kept_across_a_resume() {
+        use crate::overlap_watch::{OverlapWatch, RunWatches};
+        let watches = RunWatches {
             wall_watch: OverlapWatch {
                 largest: 0.7572,
                 step: 13_800,
@@ -262,20 +264,27 @@ mod tests {
                 largest: 0.5,
                 step: 42,
             },
+            energy_watch: crate::energy_watch::EnergyWatch {
+                reference: Some(12.5),
+                step: 1,
+            },
         };
         let c = RunCheckpoint::new(3, 1.5, "", &[], &Trajectory::default(), None, watches);
         let mut v = serde_json::to_value(&c).unwrap();
         assert_eq!(v["wall_watch"]["largest"], 0.7572);
         assert_eq!(v["self_watch"]["step"], 900);
         assert_eq!(v["fibre_watch"]["step"], 42);
+        assert_eq!(v["energy_watch"]["reference"], 12.5);
         let back: RunCheckpoint = serde_json::from_value(v.clone()).unwrap();
         assert_eq!(back.watches, watches);
         v.as_object_mut().unwrap().remove("fibre_watch");
         v.as_object_mut().unwrap().remove("self_watch");
+        v.as_object_mut().unwrap().remove("energy_watch");
         let older: RunCheckpoint = serde_json::from_value(v.clone()).unwrap();
         assert_eq!(older.watches.wall_watch, watches.wall_watch);
         assert_eq!(older.watches.self_watch, Default::default());
         assert_eq!(older.watches.fibre_watch, Default::default());
+        assert_eq!(older.watches.energy_watch, Default::default());
         v.as_object_mut().unwrap().remove("wall_watch");
         let oldest: RunCheckpoint = serde_json::from_value(v).unwrap();
         assert_eq!(oldest.watches, Default::default());

@@ -3,6 +3,7 @@
 //! `study` runs a scene over a grid of parameter values and reports error against cost.
 pub mod capillary_metrics;
 pub mod checkpoint;
+pub mod energy_watch;
 pub mod export;
 mod field_plot;
 mod field_snapshots;

@@ -65,19 +65,22 @@ pub struct OverlapWatch {
 }
 
 /// The watches of a run, as a checkpoint keeps them (each absent in checkpoints written
-/// before it existed: then from the resume on).
+/// before it existed: then from the resume on): the three overlaps, and the energy of a
+/// closed fibre system ([`crate::energy_watch`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct OverlapWatches {
+pub struct RunWatches {
     #[serde(default)]
     pub wall_watch: OverlapWatch,
     #[serde(default)]
     pub self_watch: OverlapWatch,
     #[serde(default)]
     pub fibre_watch: OverlapWatch,
+    #[serde(default)]
+    pub energy_watch: crate::energy_watch::EnergyWatch,
 }
 
-impl OverlapWatches {
-    /// Take one step's diagnostics into every watch.
+impl RunWatches {
+    /// Take one step's diagnostics into every overlap watch.
     pub fn observe(&mut self, step: u64, diagnostics: &[(String, f64)]) {
         self.wall_watch.observe(step, Overlap::Wall, diagnostics);
         self.self_watch
@@ -179,7 +182,7 @@ mod tests {
 
     #[test]
     fn keeps_the_largest_overlap_and_its_step() {
-        let mut w = OverlapWatches::default();
+        let mut w = RunWatches::default();
         for (step, v) in [(1, 0.0), (2, 0.3), (3, 0.7), (4, 0.2)] {
             w.observe(step, &report(v, 0.1 * step as f64));
         }
@@ -231,7 +234,7 @@ mod tests {
             assert_eq!(OverlapWatch::default().warning(what, 1e-9, &[0]), None);
         }
         // Each watch reads its own diagnostic.
-        let mut w = OverlapWatches::default();
+        let mut w = RunWatches::default();
         w.observe(7, &report(0.0, 2.5));
         assert_eq!(w.wall_watch, OverlapWatch::default());
         assert!(w

@@ -2,7 +2,7 @@
 //! everything, and write the summary — also when a node fails or the user presses Ctrl-C.
 use crate::links::{self, LinkFailure, NodeLink};
 use crate::mcap_log::RunLog;
-use crate::overlap_watch::{Overlap, OverlapWatch, OverlapWatches};
+use crate::overlap_watch::{Overlap, OverlapWatch, RunWatches};
 use crate::pipeline;
 use crate::scene::LoadedScene;
 use crate::schedule::{self, Plan};
@@ -322,7 +322,7 @@ fn radii(scene: &LoadedScene) -> Vec<f64> {
 
 /// The summary's warnings about beads inside a wall (scenes with walls), inside each other
 /// and inside another fibre's (scenes with two fibres or more; `overlap_watch.rs`).
-fn overlap_warnings(scene: &LoadedScene, watches: &OverlapWatches) -> Vec<String> {
+fn overlap_warnings(scene: &LoadedScene, watches: &RunWatches) -> Vec<String> {
     let radius = radii(scene).into_iter().fold(f64::INFINITY, f64::min);
     let without = |what: Overlap| -> Vec<usize> {
         let on = toml::Value::Boolean(true);
@@ -486,7 +486,7 @@ struct RunState {
     last_diagnostics: Vec<(String, f64)>,
     /// The largest `wall_overlap`, `self_overlap` and `fibre_overlap` the fibre node reported,
     /// over every step.
-    watches: OverlapWatches,
+    watches: RunWatches,
     metrics: BTreeMap<String, crate::metrics::Metric>,
     /// Metrics asked for that could not be computed, with the reason.
     metric_errors: BTreeMap<String, String>,
@@ -686,6 +686,8 @@ fn drive(
         fields_every,
         rests,
     };
+    // Nothing feeds the fibres energy: a growth of it is an instability (energy_watch.rs).
+    let closed = crate::energy_watch::applies(&st.effects);
     for step in first_step..steps {
         let full = full_reports(INTERRUPTED.load(Ordering::SeqCst));
         // The steps after the first go in batches where the run is pipelined.
@@ -708,7 +710,17 @@ fn drive(
         let report = merge_reports(reports);
         st.steps_done = step + 1;
         st.time = (step + 1) as f64 * dt;
-        if let Some((k, v)) = report.iter().find(|(_, v)| !v.is_finite()) {
+        let blowup = if let Some((k, v)) = report.iter().find(|(_, v)| !v.is_finite()) {
+            Some(format!("{k} = {v}; where the flow or the fibres diverged,"))
+        } else if closed {
+            st.watches
+                .energy_watch
+                .observe(step + 1, &report)
+                .map(|b| format!("{};", b.describe()))
+        } else {
+            None
+        };
+        if let Some(cause) = blowup {
             log.diagnostics(step + 1, st.time, &report).map_err(fail)?;
             let limits: Vec<String> = st
                 .configured
@@ -717,8 +729,7 @@ fn drive(
                 .map(|(name, dt)| format!("{name} {}", cosim::scene_keys::Sig(*dt)))
                 .collect();
             return Err(fail(format!(
-                "the run became unstable at step {}: {k} = {v}; where the flow or the fibres \
-                 diverged, lower time.dt = {} (its limits: {})",
+                "the run became unstable at step {}: {cause} lower time.dt = {} (its limits: {})",
                 step + 1,
                 cosim::scene_keys::Sig(dt),
                 if limits.is_empty() {

@@ -5,8 +5,11 @@
 //! [`crate::self_contact`] between fibres: `U = (k / 2) (r_a + r_b - |X_i - X_j|)^2` while
 //! positive, along the line of centres (minimum image across the fluid's periodic box), so it
 //! keeps momentum and angular momentum. `k` is the smaller of the two fibres' contact
-//! stiffnesses (each its axial bond stiffness, as for the self contact): a bead in contact
-//! gets at most one more spring as stiff as its own bonds.
+//! stiffnesses (each its axial bond stiffness, as for the self contact): a bead touching one
+//! bead of another fibre gets one more spring as stiff as its own bonds, a bead lodged between
+//! two of them two. Near the beam-stiffness limit that can make the step unstable (two fibres
+//! crossing at 0.88 of it grew for thousands of steps); the coordinator's energy watch ends
+//! such a run (coordinator/src/energy_watch.rs).
 //!
 //! The fibres then depend on each other within a step: the fibre node takes their sub-steps
 //! together ([`crate::fibre::together`]), refreshing the contact before every force
