@@ -140,7 +140,7 @@ fn fpd_stiffness_limit_refuses_too_stiff_and_accepts_what_runs() {
     .unwrap_err();
     assert!(
         e.contains("fibre.0 is too stiff for the explicit FPD coupling")
-            && e.contains("fibre.0.stretch_stiffness (k_s = 1.000000e4) to at most"),
+            && e.contains("fibre.0.stretch_stiffness (k_s = 10000) to at most"),
         "{e}"
     );
     // The scene's fibre: k_s = 16, K = 3.3. omega_max^2 is linear in (k_s, K), so scaling

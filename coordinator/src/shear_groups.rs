@@ -19,7 +19,7 @@
 //! (`fluid.confinement`, `fluid.particle_shear_reynolds`), so a rounded gap shows there.
 
 use crate::metrics::number;
-use cosim::scene_keys::{positive, Num, Sig};
+use cosim::scene_keys::{positive, AtMost, Num, Sig};
 
 /// The FPD fluid's default density (`fluid.density` absent), as the fluid node reads it.
 const DEFAULT_DENSITY: f64 = 1.0;
@@ -190,8 +190,11 @@ pub fn resolve(scene: &mut toml::Table) -> Result<Resolved, String> {
         fluid.insert("viscosity".into(), toml::Value::Float(eta));
         fluid.remove(RE);
         out.lines.push(format!(
-            "fluid.particle_shear_reynolds = {re} -> fluid.viscosity = {eta} (rho gamma l_c^2 \
-             / (4 Re_ps), gamma = {gamma})"
+            "fluid.particle_shear_reynolds = {} -> fluid.viscosity = {} (rho gamma l_c^2 \
+             / (4 Re_ps), gamma = {})",
+            Num(re),
+            Sig(eta),
+            Sig(gamma)
         ));
     }
     Ok(out)
@@ -245,7 +248,7 @@ fn set_gap(
              [{nx}, {ny}], below the fluid's {min_rows} rows; expected C at most {}",
             Num(c),
             Num(exact),
-            Sig(round_down(lc / (min_rows - margin - 0.5)))
+            AtMost(lc / (min_rows - margin - 0.5))
         ));
     }
     fluid.insert(
@@ -259,22 +262,20 @@ fn set_gap(
         "H = ny = l_c / C".to_string()
     };
     out.lines.push(format!(
-        "fluid.confinement = {c} -> fluid.grid = [{nx}, {ny}] ({gap}, l_c = {lc})"
+        "fluid.confinement = {} -> fluid.grid = [{nx}, {ny}] ({gap}, l_c = {})",
+        Num(c),
+        Sig(lc)
     ));
     if (h - exact).abs() > 1e-9 * exact {
         out.notes.push(format!(
-            "fluid.confinement = {c}: the gap l_c / C = {exact:.4} is rounded to {h} lattice \
-             nodes, so the scene runs at C = {:.6} (the summary's fluid.confinement)",
-            lc / h
+            "fluid.confinement = {}: the gap l_c / C = {} is rounded to {h} lattice \
+             nodes, so the scene runs at C = {} (the summary's fluid.confinement)",
+            Num(c),
+            Sig(exact),
+            Sig(lc / h)
         ));
     }
     Ok(())
-}
-
-/// `x` rounded down to six significant digits, so that a limit quoted in a message passes.
-fn round_down(x: f64) -> f64 {
-    let p = 10f64.powi(x.abs().log10().floor() as i32 - 5);
-    (x / p).floor() * p
 }
 
 /// Without `fluid.confinement` the scene's own fluid.grid = [nx, ny, ..] must leave a gap
@@ -488,5 +489,18 @@ bead_radius = 4.0
         );
         let e = err(&FIG7.replace("confinement = 0.5\n", ""));
         assert!(e.contains("fluid.grid"), "{e}");
+    }
+
+    /// A confinement whose gap falls below the fluid's smallest grid names itself and the
+    /// largest C that fits, rounded down so that the C quoted passes.
+    #[test]
+    fn too_large_a_confinement_quotes_one_that_fits() {
+        let e = err(&FIG7.replace("confinement = 0.5\n", "confinement = 20.0\n"));
+        assert!(e.contains("fluid.confinement = 20"), "{e}");
+        let quoted = e.rsplit("expected C at most ").next().unwrap();
+        assert!(quoted.parse::<f64>().is_ok(), "{e}");
+        let mut t =
+            table(&FIG7.replace("confinement = 0.5\n", &format!("confinement = {quoted}\n")));
+        resolve(&mut t).unwrap_or_else(|e| panic!("C = {quoted}: {e}"));
     }
 }

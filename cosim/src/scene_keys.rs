@@ -163,6 +163,54 @@ impl std::fmt::Display for Sig {
     }
 }
 
+/// A bound a message quotes for the user to set ("lower time.dt to at most ..."), as [`Sig`]
+/// writes it but rounded down at its seventh significant digit, so that the value quoted
+/// passes the check it comes from (rounded to nearest, 0.011344917 would read 0.01134492,
+/// just above the bound).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AtMost(pub f64);
+
+/// [`AtMost`] for a lower bound ("raise ... to at least ..."): rounded up.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AtLeast(pub f64);
+
+/// `x` as [`Sig`] writes it, rounded towards minus infinity (`up`: plus infinity) at its
+/// seventh significant digit: the nearest seven-digit value if it reads back on the right
+/// side of `x` (so that a short value such as 0.005 reads as itself), else the next one
+/// towards the bound, each checked by reading the text back.
+fn bound_text(x: f64, up: bool) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return Sig(x).to_string();
+    }
+    let p = 10f64.powi(x.abs().log10().floor() as i32 - 6);
+    let scaled = x / p;
+    let (towards, beyond) = if up {
+        (scaled.ceil(), scaled.ceil() + 1.0)
+    } else {
+        (scaled.floor(), scaled.floor() - 1.0)
+    };
+    for whole in [scaled.round(), towards, beyond] {
+        let text = Sig(whole * p).to_string();
+        let back: f64 = text.parse().unwrap_or(f64::NAN);
+        if (up && back >= x) || (!up && back <= x) {
+            return text;
+        }
+    }
+    Sig(x).to_string()
+}
+
+impl std::fmt::Display for AtMost {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", bound_text(self.0, false))
+    }
+}
+
+impl std::fmt::Display for AtLeast {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", bound_text(self.0, true))
+    }
+}
+
 /// Numbers as a message shows them, `[a, b, c]` (each as [`Num`]).
 pub struct Nums<'a>(pub &'a [f64]);
 
@@ -478,5 +526,29 @@ mod tests {
             positive("fluid.xi", -1e300).unwrap_err(),
             "fluid.xi: expected a positive number, got -1e300"
         );
+    }
+
+    /// A quoted bound passes its check: at most x reads at or below x, at least x at or
+    /// above, with seven significant digits; a value with seven digits or fewer reads as is.
+    #[test]
+    fn quoted_bounds_pass_their_checks() {
+        assert_eq!(AtMost(0.011344917).to_string(), "0.01134491");
+        assert_eq!(AtLeast(0.011344911).to_string(), "0.01134492");
+        assert_eq!(AtMost(0.005).to_string(), "0.005");
+        assert_eq!(AtLeast(0.1).to_string(), "0.1");
+        assert_eq!(AtMost(1.3e-5).to_string(), "1.3e-5");
+        assert_eq!(AtMost(-2.0000004).to_string(), "-2.000001");
+        assert_eq!(AtMost(0.0).to_string(), "0");
+        assert_eq!(AtMost(f64::INFINITY).to_string(), "inf");
+        let mut x = 0.7f64;
+        for _ in 0..10_000 {
+            // A deterministic spread over many decades.
+            x = (x * 7919.0 + 0.123456789).fract();
+            let v = x * 10f64.powi((x * 1e6) as i32 % 40 - 20);
+            let down: f64 = AtMost(v).to_string().parse().unwrap();
+            let up: f64 = AtLeast(v).to_string().parse().unwrap();
+            assert!(down <= v && up >= v, "{v:e}: {down:e} {up:e}");
+            assert!((v - down) <= 1.1e-6 * v && (up - v) <= 1.1e-6 * v, "{v:e}");
+        }
     }
 }

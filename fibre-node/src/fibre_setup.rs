@@ -16,6 +16,7 @@ use crate::spm_exchange::ExchangeRatios;
 use crate::stability::{fpd_margin, fpd_stiffness_limit, stability_limit, StabilityLimit, SAFETY};
 use crate::{spm_exchange, spm_exchange_stiffness};
 use cosim::profile::DEFAULT_FPD_INTERFACE_RATIO;
+use cosim::scene_keys::{AtMost, Num, Sig};
 
 /// A fibre ready to run and what its set-up tells the user.
 pub(crate) struct FibreSetup {
@@ -170,20 +171,23 @@ fn too_stiff_for_fpd(
     };
     format!(
         "fibre.{n} is too stiff for the explicit FPD coupling (S2023 section II C): \
-         with the fluid a bead displaces, rho pi a^2 = {:.6e}, as its inertia, its \
-         fastest mode has omega_max = {:.6e}, stable for time.dt up to {:.6e} \
+         with the fluid a bead displaces, rho pi a^2 = {}, as its inertia, its \
+         fastest mode has omega_max = {}, stable for time.dt up to {} \
          ({:.3} x 2 / omega_max at fluid.interface_ratio = {}, a measured bound), \
-         and the lattice step is {:?}; scale its \
-         stiffness by at most {factor:.4e}: fibre.{n}.stretch_stiffness (k_s = \
-         {k_s:.6e}) to at most {:.6e} and its bending (k_b = {k_b:.6e}, or \
+         and the lattice step is {}; scale its \
+         stiffness by at most {}: fibre.{n}.stretch_stiffness (k_s = \
+         {}) to at most {} and its bending (k_b = {}, or \
          fibre.{n}.bending_number) by the same factor, or raise fluid.density",
-        fpd_mass,
-        lim.omega_max,
-        lim.dt_limit,
+        Sig(fpd_mass),
+        Sig(lim.omega_max),
+        AtMost(lim.dt_limit),
         fpd_margin(r_xi),
-        r_xi,
-        scene.dt,
-        k_s * factor
+        Num(r_xi),
+        Num(scene.dt),
+        AtMost(factor),
+        Sig(k_s),
+        AtMost(k_s * factor),
+        Sig(k_b),
     )
 }
 
@@ -220,14 +224,16 @@ fn too_large_for_the_beam(
     };
     format!(
         "time step too large for fibre.{n} (beam stiffness limit): \
-         time.dt / fibre.{n}.substeps = {:?} / {} = {h:.6e} exceeds the stable fibre step \
-         {h_ok:.6e} (symplectic Euler, omega_max = {:.6e}, damping {}, 2 % margin); \
-         lower time.dt to at most {:.6e}{advice}",
-        scene.dt,
+         time.dt / fibre.{n}.substeps = {} / {} = {} exceeds the stable fibre step \
+         {} (symplectic Euler, omega_max = {}, damping {}, 2 % margin); \
+         lower time.dt to at most {}{advice}",
+        Num(scene.dt),
         cfg.substeps,
-        lim.omega_max,
-        cosim::scene_keys::Num(lim.damping),
-        lim.dt_limit
+        Sig(h),
+        Sig(h_ok),
+        Sig(lim.omega_max),
+        Num(lim.damping),
+        AtMost(lim.dt_limit)
     )
 }
 

@@ -20,7 +20,7 @@
 //! (`fibre.N.exchange = "implicit"`, `crate::fibre`) takes the drag at the new velocity and
 //! has no such limit: these beads are not checked.
 use cosim::profile::{profile_moment, profile_volume};
-use cosim::scene_keys::Num;
+use cosim::scene_keys::{AtLeast, Num};
 
 /// Largest accepted ratio of the fluid in a bead's profile to the bead, in mass and in
 /// moment of inertia: the bound below which the explicit exchange is stable for any flow.
@@ -93,11 +93,11 @@ pub fn check(p: &str, r: ExchangeRatios, density: f64) -> Result<(), String> {
         "{p}: the beads are too light for the explicit SPM momentum exchange: the fluid in a \
          bead's smoothed profile (L2020 eq. 25, fluid.xi, fluid.xi_cutoff) has {:.3} times \
          the bead's {what}, at or above the limit {MAX_PROFILE_TO_BEAD} below which the \
-         exchange is stable for any flow; raise {p}.density to at least {:.4}, set \
+         exchange is stable for any flow; raise {p}.density to at least {}, set \
          {p}.bead_inertia = \"profile\" to give the bead the moment of inertia of its profile, \
          or set {p}.exchange = \"implicit\" (stable for any ratio)",
         Num(ratio),
-        Num(density * worst / MAX_PROFILE_TO_BEAD * 1.0001)
+        AtLeast(density * worst / MAX_PROFILE_TO_BEAD * 1.0001)
     ))
 }
 

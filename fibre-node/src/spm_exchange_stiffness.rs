@@ -61,6 +61,7 @@
 use crate::fibre::Fibre;
 use crate::spm_exchange::ExchangeRatios;
 use crate::stability::{mass_weighted_stiffness_matrix, stable_step, SAFETY as STEP_SAFETY};
+use cosim::scene_keys::{AtLeast, AtMost, Num, Sig};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
@@ -611,12 +612,12 @@ impl ExchangeStiffness {
         };
         Some(format!(
             "{p}: under the explicit SPM momentum exchange its modes (the fastest of omega = \
-             {:.6e}) grow from time.dt = {:.6e} (omega dt = {:.3}); at this time.dt the fibre's damping \
+             {}) grow from time.dt = {} (omega dt = {:.3}); at this time.dt the fibre's damping \
              ({p}.damping, {p}.internal_damping) holds every mode again, so it runs, but a \
              smaller time.dt or less damping may not (docs/validation/spm.md, \"The explicit \
              exchange's stiffness limit\")",
-            l.omega_max,
-            l.dt_limit / SAFETY,
+            Sig(l.omega_max),
+            Sig(l.dt_limit / SAFETY),
             l.omega_dt
         ))
     }
@@ -658,7 +659,10 @@ pub fn check(
             own * STEP_SAFETY * n as f64 >= dt && growth(tau) <= 1.0
         })
         .map_or(String::new(), |tau| {
-            format!(", give the bonds internal damping ({p}.internal_damping = {tau:.3e} or more)")
+            format!(
+                ", give the bonds internal damping ({p}.internal_damping = {} or more)",
+                AtLeast(tau)
+            )
         });
     // Heavier beads: f times the density divides every ratio by f and every mode's omega by
     // sqrt f (the beads' mass and moment of inertia both grow with it, bead_inertia "solid"
@@ -690,28 +694,28 @@ pub fn check(
         })
         .map_or(String::new(), |f| {
             // Rounded up, so that the density named passes too.
-            let at_least = (density * f * 1e4).ceil() / 1e4;
-            format!(", raise {p}.density to at least {at_least:.4}")
+            format!(", raise {p}.density to at least {}", AtLeast(density * f))
         });
     let lower = lim.map_or(String::new(), |l| {
         format!(
-            ", lower time.dt to at most {:.6e} (the first instability, omega_max dt = {:.3}, \
-             times {SAFETY}) or scale all of the fibre's stiffnesses by at most {:.4e}",
-            l.dt_limit,
+            ", lower time.dt to at most {} (the first instability, omega_max dt = {:.3}, \
+             times {SAFETY}) or scale all of the fibre's stiffnesses by at most {}",
+            AtMost(l.dt_limit),
             l.omega_dt,
-            (l.dt_limit / dt).powi(2)
+            AtMost((l.dt_limit / dt).powi(2))
         )
     });
     Err(format!(
-        "{p} is too stiff for the explicit SPM momentum exchange at time.dt = {dt:?}: the \
+        "{p} is too stiff for the explicit SPM momentum exchange at time.dt = {}: the \
          fluid's impulse, taken once a step at the velocity of the step's start (L2020 eqs. \
-         35-36), feeds its modes (the fastest of omega = {:.6e}, omega dt = {:.3}; \
+         35-36), feeds its modes (the fastest of omega = {}, omega dt = {:.3}; \
          profile-to-bead ratios {:.3} in mass, {:.3} in moment of inertia), which grow by \
          {g:.4} a step at this time.dt or up to {:.0} % above it (a model of every mode \
          with the flow share k = {k:.4} for this nu dt / xi^2, docs/validation/spm.md \
          \"The explicit exchange's stiffness limit\"); set {p}.exchange = \"implicit\" (no \
          such limit){damping}{heavier}{lower}",
-        modes.omega_max(),
+        Num(dt),
+        Sig(modes.omega_max()),
         modes.omega_max() * dt,
         r.mass,
         r.inertia,
@@ -1026,8 +1030,8 @@ mod tests {
         for s in [
             "fibre.0 is too stiff for the explicit SPM momentum exchange at time.dt = 0.25",
             "fibre.0.exchange = \"implicit\"",
-            "fibre.0.internal_damping = 3.334e-3 or more",
-            "lower time.dt to at most 8.1722",
+            "fibre.0.internal_damping = 0.003333804 or more",
+            "lower time.dt to at most 0.0817224",
         ] {
             assert!(e.contains(s), "{s:?} missing from: {e}");
         }

@@ -179,10 +179,10 @@ impl BinaryFluid {
         if self.cfg.ch.dt > cap.dt_max {
             return Err(format!(
                 "time step too large for the binary fluid (capillary limit): time.dt = {} \
-                 exceeds {:.6e} ({}); lower time.dt or fluid.binary.e0 / sigma, or raise \
+                 exceeds {} ({}); lower time.dt or fluid.binary.e0 / sigma, or raise \
                  fluid.viscosity",
                 Num(self.cfg.ch.dt),
-                cap.dt_max,
+                cosim::scene_keys::Sig(cap.dt_max),
                 cap.detail
             ));
         }

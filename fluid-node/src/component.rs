@@ -493,9 +493,11 @@ impl Run {
         if cfl.is_nan() || cfl > CFL_ABORT {
             return Err(ComponentError(format!(
                 "fluid-node: the flow became unstable at step {step} (advective CFL limit): \
-                 max|u| dt = {vmax:.6e} * {} = {cfl:.6e} exceeds {CFL_ABORT}; lower \
+                 max|u| dt = {} * {} = {} exceeds {CFL_ABORT}; lower \
                  time.dt or the driving (fluid.body_force, walls.velocity)",
-                cosim::scene_keys::Num(dt)
+                cosim::scene_keys::Sig(vmax),
+                cosim::scene_keys::Num(dt),
+                cosim::scene_keys::Sig(cfl)
             )));
         }
         let full = detail == Detail::Full;

@@ -120,9 +120,9 @@ pub enum CahnHilliardError {
         got: usize,
     },
     #[error(
-        "cahn-hilliard: time step too large ({name} limit): dt = {} exceeds {dt_max:.6e} \
-         ({detail})",
-        cosim::scene_keys::Num(*.dt)
+        "cahn-hilliard: time step too large ({name} limit): dt = {} exceeds {} ({detail})",
+        cosim::scene_keys::Num(*.dt),
+        cosim::scene_keys::Sig(*.dt_max)
     )]
     TimeStep {
         name: &'static str,
@@ -131,13 +131,16 @@ pub enum CahnHilliardError {
         detail: String,
     },
     #[error(
-        "cahn-hilliard: the order parameter diverged at step {step} (max |psi| = {max_abs:e}); \
-         the time step is above a stability limit"
+        "cahn-hilliard: the order parameter diverged at step {step} (max |psi| = {}); \
+         the time step is above a stability limit",
+        cosim::scene_keys::Sig(*.max_abs)
     )]
     Diverged { step: u64, max_abs: f64 },
     #[error(
         "cahn-hilliard: relaxation did not converge in {iterations} iterations \
-         (max |mu| / e0 = {residual:e} > {tolerance:e})"
+         (max |mu| / e0 = {} > {})",
+        cosim::scene_keys::Sig(*.residual),
+        cosim::scene_keys::Sig(*.tolerance)
     )]
     NotConverged {
         iterations: usize,

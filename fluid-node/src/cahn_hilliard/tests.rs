@@ -215,7 +215,7 @@ fn time_step_limits_follow_the_linear_analysis() {
     .unwrap_err();
     assert_eq!(
         e.to_string(),
-        "cahn-hilliard: time step too large (phase-field advective CFL limit): dt = 10 exceeds \
-         5.000000e0 (max|u| dt / dx <= 0.5 with max|u| = 0.1, dx = 1)"
+        "cahn-hilliard: time step too large (phase-field advective CFL limit): dt = 10 exceeds 5 \
+         (max|u| dt / dx <= 0.5 with max|u| = 0.1, dx = 1)"
     );
 }
