@@ -160,6 +160,17 @@ fn time_step_above_the_stability_limit() {
     );
 }
 
+/// A stiffness so large that the frequency estimate overflows: no time step to quote, so
+/// the refusal names the key instead of "lower time.dt to at most 0".
+#[test]
+fn stiffness_beyond_any_time_step() {
+    check(
+        "overflowing-stiffness",
+        &GOOD.replace("youngs_modulus = 1.0e4", "youngs_modulus = 1e300"),
+        &["too stiff for any time step", "fibre.0.youngs_modulus"],
+    );
+}
+
 #[test]
 fn set_path_that_does_not_exist() {
     let p = write_scene("set-path", GOOD);

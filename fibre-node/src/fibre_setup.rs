@@ -154,6 +154,26 @@ fn fpd_limit(
     Ok(lim)
 }
 
+/// The refusal of fibre `n` when its stiffness overflows the frequency estimate (no step to
+/// quote), naming the keys that set it.
+fn overflowed(n: usize, lim: &StabilityLimit, bead_spring: bool) -> Option<String> {
+    if lim.omega_max.is_finite() && lim.step_limit > 0.0 {
+        return None;
+    }
+    let keys = if bead_spring {
+        format!(
+            "fibre.{n}.stretch_stiffness, fibre.{n}.bending_stiffness or fibre.{n}.bending_number"
+        )
+    } else {
+        format!("fibre.{n}.youngs_modulus")
+    };
+    Some(format!(
+        "fibre.{n} is too stiff for any time step: the frequency of its fastest mode overflows \
+         (omega_max = {}); lower its stiffness ({keys})",
+        Sig(lim.omega_max)
+    ))
+}
+
 /// The refusal of fibre `n`, whose FPD limit `lim` lies below the lattice step.
 fn too_stiff_for_fpd(
     n: usize,
@@ -163,6 +183,9 @@ fn too_stiff_for_fpd(
     fpd_mass: f64,
     r_xi: f64,
 ) -> String {
+    if let Some(e) = overflowed(n, lim, matches!(f.model, Model::BeadSpring(_))) {
+        return e;
+    }
     // omega^2 is linear in (k_s, k_b), so both scaled by this factor fit.
     let factor = (lim.dt_limit / scene.dt).powi(2);
     let (k_s, k_b) = match &f.model {
@@ -215,6 +238,9 @@ fn too_large_for_the_beam(
     lim: &StabilityLimit,
 ) -> String {
     let h = scene.dt / cfg.substeps as f64;
+    if let Some(e) = overflowed(n, lim, matches!(cfg.model, ModelKind::BeadSpring)) {
+        return e;
+    }
     let h_ok = lim.step_limit * SAFETY;
     let need = (scene.dt / h_ok).ceil();
     let advice = if need <= MAX_SUBSTEPS as f64 {
