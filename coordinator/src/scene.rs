@@ -200,16 +200,79 @@ pub fn from_text(
 fn parse_checked(value: toml::Value, origin: &str) -> Result<Scene, SceneError> {
     let scene: Scene = serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
-        let inner = e.into_inner().to_string();
-        let inner = cosim::scene_keys::unknown_key(&inner).unwrap_or_else(|| inner.trim().into());
-        if path == "." || path.is_empty() {
-            err(format!("{origin}: {inner}"))
-        } else {
-            err(format!("{origin}: key `{path}`: {inner}"))
+        let msg = key_message(
+            origin,
+            &path,
+            &e.into_inner().to_string(),
+            (
+                &["fibre"],
+                &["time", "output", "analysis", "fluid", "walls"],
+            ),
+        );
+        // Read as a byte: 300 is a whole number too, so say what is meant.
+        match msg.split(", got ").nth(1) {
+            Some(got) if path == "dimensions" => err(format!(
+                "{origin}: key `dimensions`: expected 2 or 3, got {got}"
+            )),
+            _ => err(msg),
         }
     })?;
     check_ranges(&scene)?;
     Ok(scene)
+}
+
+/// A serde error at `path` of the file `origin` (a scene or a study) in plain words, naming
+/// the key: an unknown key with a guess at the one meant, a missing one, or a value of the
+/// wrong kind ([`cosim::scene_keys::plain_words`]). `arrays_of_tables` and `tables` name the
+/// keys written `[[key]]` and `[key]`, so that one written with the other brackets is told
+/// how to write it.
+pub fn key_message(
+    origin: &str,
+    path: &str,
+    inner: &str,
+    (arrays_of_tables, tables): (&[&str], &[&str]),
+) -> String {
+    let (first, _) = cosim::scene_keys::message_line(inner);
+    if let Some(unknown) = cosim::scene_keys::unknown_key(inner) {
+        return if path == "." || path.is_empty() {
+            format!("{origin}: {unknown}")
+        } else {
+            format!("{origin}: key `{path}`: {unknown}")
+        };
+    }
+    if let Some(field) = first
+        .strip_prefix("missing field `")
+        .and_then(|r| r.split('`').next())
+    {
+        let full = if path == "." || path.is_empty() {
+            field.to_string()
+        } else {
+            format!("{path}.{field}")
+        };
+        return format!("{origin}: key `{full}` is required and missing");
+    }
+    // A table written [[key]]: serde reads its fields as the entries of an array.
+    if let Some((table, _)) = path.split_once('[') {
+        if tables.contains(&table) {
+            return format!(
+                "{origin}: key `{table}`: expected a table, got an array of tables (written \
+                 [{table}], with one bracket)"
+            );
+        }
+    }
+    let plain = cosim::scene_keys::plain_words(inner);
+    let hint = if arrays_of_tables.contains(&path) && plain.starts_with("expected an array") {
+        format!(" (each entry is a table written [[{path}]], with two brackets)")
+    } else if tables.contains(&path) && plain.starts_with("expected a table, got an array") {
+        format!(" (written [{path}], with one bracket)")
+    } else {
+        String::new()
+    };
+    if path == "." || path.is_empty() {
+        format!("{origin}: {plain}{hint}")
+    } else {
+        format!("{origin}: key `{path}`: {plain}{hint}")
+    }
 }
 
 fn check_ranges(s: &Scene) -> Result<(), SceneError> {
@@ -393,5 +456,48 @@ mod tests {
             .unwrap_err()
             .0;
         assert!(e.contains("dimensions"), "{e}");
+    }
+
+    /// Values of the wrong kind and tables with the wrong brackets are named in plain words,
+    /// without serde's type names (u64, struct TimeConfig, a sequence).
+    #[test]
+    fn wrong_kinds_and_brackets_are_told_plainly() {
+        let base = "[time]\ndt = 0.1\nsteps = 3\n";
+        let e = |text: &str| from_text(text, "s", &[]).unwrap_err().0;
+        for (text, want) in [
+            (
+                base.replace("3", "1.5"),
+                "s: key `time.steps`: expected a whole number (0 or more), got 1.5",
+            ),
+            (
+                base.replace("3", "\"3\""),
+                "s: key `time.steps`: expected a whole number (0 or more), got the text \"3\" \
+                 (numbers are written without quotes)",
+            ),
+            (
+                format!("dimensions = 300\n{base}"),
+                "s: key `dimensions`: expected 2 or 3, got 300",
+            ),
+            (
+                format!("{base}[fibre]\nbeads = 3\n"),
+                "s: key `fibre`: expected an array, got a table (each entry is a table written \
+                 [[fibre]], with two brackets)",
+            ),
+            (
+                base.replace("[time]", "[[time]]"),
+                "s: key `time`: expected a table, got an array of tables (written [time], with \
+                 one bracket)",
+            ),
+            (
+                base.replace("steps = 3\n", ""),
+                "s: key `time.steps` is required and missing",
+            ),
+            (
+                "title = \"x\"\n".into(),
+                "s: key `time` is required and missing",
+            ),
+        ] {
+            assert_eq!(e(&text), want);
+        }
     }
 }

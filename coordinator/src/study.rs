@@ -243,10 +243,12 @@ fn load(path: &Path) -> Result<(Study, PathBuf), String> {
             )
         })?)
         .map_err(|e| {
-            let inner = e.inner().to_string();
-            let inner =
-                cosim::scene_keys::unknown_key(&inner).unwrap_or_else(|| inner.trim().into());
-            format!("{}: key `{}`: {inner}", path.display(), e.path())
+            crate::scene::key_message(
+                &path.display().to_string(),
+                &e.path().to_string(),
+                &e.inner().to_string(),
+                (&["vary"], &["set", "diagram", "convergence", "curve"]),
+            )
         })?;
     let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     Ok((study, base))

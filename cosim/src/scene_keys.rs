@@ -27,12 +27,102 @@ pub fn serde_message(prefix: &str, path: &serde_path_to_error::Path, msg: &str) 
     if msg.starts_with("missing field ") {
         return format!("{full}.{quoted}: required key is missing");
     }
-    let msg = msg
-        .replace("expected f64", "expected a number")
-        .replace("expected i64", "expected an integer")
-        .replace("expected an array of length 3", "expected [x, y, z]")
-        .replace("expected a sequence", "expected an array");
-    format!("{full}: {msg}")
+    format!("{full}: {}", plain_words(msg))
+}
+
+/// serde's and toml's wording of a value of the wrong kind in plain words, expected first:
+/// "invalid type: floating point `1.5`, expected u64 in `time.steps`" reads "expected a whole
+/// number (0 or more), got 1.5"; "invalid type: map, expected a sequence" reads "expected an
+/// array, got a table". Any other message is returned as it is (its first line, without
+/// toml's trailing "in `key`", which the caller names).
+pub fn plain_words(msg: &str) -> String {
+    let (msg, at) = message_line(msg);
+    let plain = plain_words_of_line(msg);
+    match at {
+        Some(at) => format!("{plain} ({at})"),
+        None => plain,
+    }
+}
+
+/// The line of a serde or toml error that says what is wrong, and where in the file when
+/// toml says (its span-aware errors open with "TOML parse error at line L, column C" and an
+/// excerpt of the file, the message last).
+pub fn message_line(msg: &str) -> (&str, Option<&str>) {
+    let first = msg.lines().next().unwrap_or("").trim_end();
+    match first.strip_prefix("TOML parse error at ") {
+        Some(at) => (
+            msg.lines()
+                .rev()
+                .map(str::trim_end)
+                .find(|l| !l.is_empty())
+                .unwrap_or(first),
+            Some(at),
+        ),
+        None => (first, None),
+    }
+}
+
+fn plain_words_of_line(msg: &str) -> String {
+    let msg = match msg.rfind(" in `") {
+        Some(i) if msg.ends_with('`') => &msg[..i],
+        _ => msg,
+    };
+    let kind = |e: &str| -> String {
+        match e {
+            "u8" | "u16" | "u32" | "u64" | "usize" => "a whole number (0 or more)".into(),
+            "i8" | "i16" | "i32" | "i64" | "isize" | "an integer" => "a whole number".into(),
+            "f32" | "f64" => "a number".into(),
+            "a sequence" => "an array".into(),
+            "a map" => "a table".into(),
+            "a boolean" => "true or false".into(),
+            "an array of length 3" => "[x, y, z]".into(),
+            e if e.starts_with("struct ") => "a table".into(),
+            e => e.into(),
+        }
+    };
+    let value = |g: &str| -> String {
+        let quoted = |prefix: &str| {
+            g.strip_prefix(prefix)
+                .and_then(|r| r.strip_prefix('`'))
+                .and_then(|r| r.strip_suffix('`'))
+                .map(str::to_string)
+        };
+        if let Some(v) = quoted("floating point ")
+            .or_else(|| quoted("integer "))
+            .or_else(|| quoted("boolean "))
+        {
+            return v;
+        }
+        match g {
+            "map" => "a table".into(),
+            "sequence" => "an array".into(),
+            g => match g.strip_prefix("string ") {
+                Some(text) => format!("the text {text}"),
+                None => g.into(),
+            },
+        }
+    };
+    let body = msg
+        .strip_prefix("invalid type: ")
+        .or_else(|| msg.strip_prefix("invalid value: "));
+    if let Some((got, expected)) = body.and_then(|b| b.rsplit_once(", expected ")) {
+        let (expected, got) = (kind(expected), value(got));
+        // A number in quotes is text.
+        let numeric = expected.contains("number") || expected.starts_with('[');
+        let quotes = if numeric && got.starts_with("the text ") {
+            " (numbers are written without quotes)"
+        } else {
+            ""
+        };
+        return format!("expected {expected}, got {got}{quotes}");
+    }
+    if let Some((n, expected)) = msg
+        .strip_prefix("invalid length ")
+        .and_then(|b| b.split_once(", expected "))
+    {
+        return format!("expected {}, got {n} values", kind(expected));
+    }
+    msg.to_string()
 }
 
 /// serde's "unknown field `foo`, expected one of `a`, `b`" as "unknown key `foo` (expected
@@ -526,6 +616,57 @@ mod tests {
             positive("fluid.xi", -1e300).unwrap_err(),
             "fluid.xi: expected a positive number, got -1e300"
         );
+    }
+
+    #[test]
+    fn serde_words_become_plain_words() {
+        for (msg, plain) in [
+            (
+                "invalid type: floating point `1.5`, expected u64 in `time.steps`",
+                "expected a whole number (0 or more), got 1.5",
+            ),
+            (
+                "invalid value: integer `-3`, expected u64",
+                "expected a whole number (0 or more), got -3",
+            ),
+            (
+                "invalid type: string \"100\", expected u64",
+                "expected a whole number (0 or more), got the text \"100\" (numbers are \
+                 written without quotes)",
+            ),
+            (
+                "invalid type: integer `3`, expected struct TimeConfig",
+                "expected a table, got 3",
+            ),
+            (
+                "invalid type: map, expected a sequence",
+                "expected an array, got a table",
+            ),
+            (
+                "invalid type: string \"x\", expected f64",
+                "expected a number, got the text \"x\" (numbers are written without quotes)",
+            ),
+            (
+                "invalid type: string \"tip\", expected a sequence",
+                "expected an array, got the text \"tip\"",
+            ),
+            (
+                "invalid length 2, expected [x, y, z]",
+                "expected [x, y, z], got 2 values",
+            ),
+            (
+                "invalid type: integer `1`, expected a boolean",
+                "expected true or false, got 1",
+            ),
+            ("something else entirely", "something else entirely"),
+            (
+                "TOML parse error at line 19, column 1\n   |\n19 | [vary]\n   | ^^^^^^\n\
+                 invalid type: map, expected a sequence\n",
+                "expected an array, got a table (line 19, column 1)",
+            ),
+        ] {
+            assert_eq!(plain_words(msg), plain, "{msg}");
+        }
     }
 
     /// A quoted bound passes its check: at most x reads at or below x, at least x at or

@@ -773,7 +773,7 @@ youngs_modulus = 1.0
             ("foo = 1", "fibre.0: unknown key `foo`"),
             ("damping = -1", "fibre.0.damping: expected a number >= 0, got -1"),
             ("substeps = 0", "fibre.0.substeps: expected an integer in 1..=1000000, got 0"),
-            ("spacing = \"two\"", "fibre.0.spacing: invalid type: string \"two\""),
+            ("spacing = \"two\"", "fibre.0.spacing: expected a number, got the text \"two\""),
             ("direction = [0, 0, 0]", "fibre.0.direction: expected a non-zero vector"),
             ("direction = [1, 0, 1]", "fibre.0.direction: a 2D scene"),
             ("direction = [1, 0]", "fibre.0.direction"),
@@ -787,7 +787,7 @@ youngs_modulus = 1.0
             ("loads = [{ bead = 1, torque = [1, 0, 0] }]", "fibre.0.loads.0.torque: a 2D scene"),
             ("loads = [{ force = [0, 1, 0] }]", "fibre.0.loads.0.bead: required key is missing"),
             ("stretch_stiffness = 3", "fibre.0.stretch_stiffness: only the bead-spring model"),
-            ("clamp = 3", "fibre.0.clamp: invalid type: integer `3`"),
+            ("clamp = 3", "fibre.0.clamp: expected an array, got 3"),
             ("beam_forces = \"exact\"", "fibre.0.beam_forces: expected \"paper\" or \"energy-consistent\", got \"exact\""),
         ];
         for (extra, want) in cases {
@@ -807,7 +807,8 @@ youngs_modulus = 1.0
             replace("beads = 10", "beads = 0"),
             "fibre.0.beads: expected at least 1 bead, got 0"
         );
-        assert!(replace("beads = 10", "beads = 2.5").starts_with("fibre.0.beads: invalid type"));
+        assert!(replace("beads = 10", "beads = 2.5")
+            .starts_with("fibre.0.beads: expected a whole number, got 2.5"));
         assert_eq!(
             replace("beads = 10\n", ""),
             "fibre.0.beads: required key is missing"
