@@ -39,7 +39,7 @@ enum Cmd {
         #[arg(long, value_name = "SECONDS", default_value_t = 600.0)]
         node_timeout: f64,
         /// Save the run's full state to OUT/checkpoint every N steps, at the last step and
-        /// on Ctrl-C.
+        /// on Ctrl-C or SIGTERM (0: no checkpoints).
         #[arg(long, value_name = "N", default_value_t = 0)]
         checkpoint_interval: u64,
         /// Continue the run from a checkpoint folder (OUT/checkpoint of an earlier run),
@@ -54,7 +54,9 @@ enum Cmd {
     },
     /// Check a scene, print its effects, schedule and time-step limits; run nothing.
     Check {
+        /// Scene file (TOML); the built-in example when omitted.
         config: Option<PathBuf>,
+        /// Override a key by its dotted path, as for `run` (repeatable).
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
     },
@@ -82,8 +84,9 @@ enum Cmd {
         /// the wall times then include the runs' contention, so keep 1 for cost plots).
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
         jobs: u16,
-        /// Check every variant as `coordinator check` does and run nothing.
-        #[arg(long, conflicts_with_all = ["replot", "out", "jobs"])]
+        /// Check every variant as `coordinator check` does and run nothing (--out and --jobs
+        /// may stay on the command line: nothing is written).
+        #[arg(long, conflicts_with = "replot")]
         check: bool,
     },
     /// Write a run's logged bead states and diagnostics as CSV (beads.csv, diagnostics.csv)

@@ -255,7 +255,7 @@ fn load(path: &Path) -> Result<(Study, PathBuf), String> {
 }
 
 /// Read and run a study file (or, with `replot`, reuse its previous runs); returns the
-/// markdown table.
+/// markdown table and a line naming the files written.
 pub fn run_file(path: &Path, out: Option<&Path>, runs: Runs) -> Result<String, String> {
     let (study, base) = load(path)?;
     let out_dir = out
@@ -613,7 +613,13 @@ fn row(
 /// The study's files in `out`: `<name>.csv` and `.md` (the table, then `note`), `.png`
 /// (error against wall time, where the metric has a reference), `_curve.png` and
 /// `_diagram.png` where the study asks for them. Returns the markdown.
+/// Write the table (CSV, markdown) and plots; returns the markdown table followed by a line
+/// naming the files written.
 fn write_outputs(study: &Study, rows: &[Row], note: &str, out: &Path) -> Result<String, String> {
+    let mut written = vec![
+        out.join(format!("{}.csv", study.name)),
+        out.join(format!("{}.md", study.name)),
+    ];
     let curve_name = study.curve.as_ref().map(|c| c.x.as_str());
     let csv = render_csv(rows, curve_name);
     std::fs::write(out.join(format!("{}.csv", study.name)), &csv).map_err(|e| e.to_string())?;
@@ -632,12 +638,14 @@ fn write_outputs(study: &Study, rows: &[Row], note: &str, out: &Path) -> Result<
         .collect();
     // A categorical metric (no reference) has no error to plot.
     if !points.is_empty() {
+        let png = out.join(format!("{}.png", study.name));
         crate::plot::error_against_time(
-            &out.join(format!("{}.png", study.name)),
+            &png,
             &title,
             &format!("relative error of {}", study.metric),
             &points,
         )?;
+        written.push(png);
     }
     if let Some(c) = &study.curve {
         let points: Vec<(f64, f64)> = rows
@@ -651,14 +659,16 @@ fn write_outputs(study: &Study, rows: &[Row], note: &str, out: &Path) -> Result<
             .first()
             .copied()
             .filter(|r0| refs.iter().all(|r| r == r0) && refs.len() == rows.len());
+        let png = out.join(format!("{}_curve.png", study.name));
         crate::plot::metric_against(
-            &out.join(format!("{}_curve.png", study.name)),
+            &png,
             &title,
             (&c.x, c.log_x),
             (&study.metric, c.log_y),
             &points,
             reference,
         )?;
+        written.push(png);
     }
     if let Some(d) = &study.diagram {
         let points: Vec<crate::plot::ClassPoint> = rows
@@ -672,15 +682,12 @@ fn write_outputs(study: &Study, rows: &[Row], note: &str, out: &Path) -> Result<
                 })
             })
             .collect();
-        crate::plot::regime_map(
-            &out.join(format!("{}_diagram.png", study.name)),
-            &title,
-            (&d.x, d.log_x),
-            (&d.y, d.log_y),
-            &points,
-        )?;
+        let png = out.join(format!("{}_diagram.png", study.name));
+        crate::plot::regime_map(&png, &title, (&d.x, d.log_x), (&d.y, d.log_y), &points)?;
+        written.push(png);
     }
-    Ok(md)
+    let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+    Ok(format!("{md}\nwrote {}", names.join(", ")))
 }
 
 fn read_summary(path: &Path) -> Result<serde_json::Value, String> {

@@ -575,19 +575,24 @@ fn spm_derived_values(cfg: &FluidConfig, grid: Grid, walls: Option<&Walls>) -> V
         derived.push(("fluid.gap".into(), w.gap));
         derived.push(("fluid.shear_rate".into(), gamma));
         let l = cfg.fibres.first().map_or(w.gap, |f| f.length());
-        derived.push((
-            "fluid.reynolds".into(),
-            cfg.density * gamma.abs() * l * l / cfg.viscosity,
-        ));
+        // Walls at one speed shear nothing: no shear Reynolds numbers.
+        if gamma != 0.0 {
+            derived.push((
+                "fluid.reynolds".into(),
+                cfg.density * gamma.abs() * l * l / cfg.viscosity,
+            ));
+        }
         if let Some(f) = cfg.fibres.first() {
             // S2023 eq. 18 with l_c = N d (the fibre's length for touching beads) and H the
             // gap between the slabs, as the FPD fluid reports them.
             let lc = f.beads as f64 * 2.0 * f.bead_radius;
             derived.push(("fluid.confinement".into(), lc / w.gap));
-            derived.push((
-                "fluid.particle_shear_reynolds".into(),
-                cfg.density * gamma.abs() * lc * lc / (4.0 * cfg.viscosity),
-            ));
+            if gamma != 0.0 {
+                derived.push((
+                    "fluid.particle_shear_reynolds".into(),
+                    cfg.density * gamma.abs() * lc * lc / (4.0 * cfg.viscosity),
+                ));
+            }
             if let Some(e) = f.youngs_modulus {
                 if gamma != 0.0 {
                     // k0 = pi r_b E / 2 with L0 = 1 (grid units).

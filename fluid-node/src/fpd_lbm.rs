@@ -434,10 +434,13 @@ fn fpd_derived_values(scene: &FpdScene, total_beads: usize) -> Vec<(String, f64)
         // K = 2 k_b / (eta_f gamma l_c^2).
         let lc = n as f64 * 2.0 * scene.coupling.radius;
         derived.push(("fluid.confinement".into(), lc / h));
-        derived.push((
-            "fluid.particle_shear_reynolds".into(),
-            scene.density * gamma.abs() * lc * lc / (4.0 * scene.viscosity),
-        ));
+        // Walls at one speed (a towed body, fpd/cylinder_drag.toml) shear nothing: no Re_ps.
+        if gamma != 0.0 {
+            derived.push((
+                "fluid.particle_shear_reynolds".into(),
+                scene.density * gamma.abs() * lc * lc / (4.0 * scene.viscosity),
+            ));
+        }
         if let (Some(Some(kb)), true) = (scene.bending_stiffness.first(), gamma != 0.0) {
             derived.push((
                 "fluid.bending_number".into(),
