@@ -614,9 +614,12 @@ impl Component for FluidComponent {
         ModelDescription {
             name: "fluid-node".into(),
             version: env!("CARGO_PKG_VERSION").into(),
-            summary: "Eulerian flow around bead chains: L2020 Smoothed Profile Method on a \
-                      periodic pseudo-spectral Navier-Stokes solver (exact viscous decay, \
-                      2/3-dealiased advection), 2D or 3D, with optional moving walls"
+            summary: "Eulerian flow around bead chains, two methods: `spm`, L2020's Smoothed \
+                      Profile Method on a periodic pseudo-spectral Navier-Stokes solver (exact \
+                      viscous decay, 2/3-dealiased advection), 2D or 3D, with optional moving \
+                      walls and a ternary Cahn-Hilliard second fluid; `fpd-lbm`, S2023's Fluid \
+                      Particle Dynamics on an MRT D2Q9 lattice Boltzmann solver, 2D, periodic or \
+                      between moving walls"
                 .into(),
             kind: "fluid".into(),
             models: vec!["spm".into(), "fpd-lbm".into()],

@@ -12,14 +12,20 @@ pub fn node_main<C: Component>(
     args: &[String],
     component: impl FnOnce() -> C,
 ) -> ExitCode {
+    let text = format!(
+        "usage: {program} serve --prefix PREFIX --name NAME | {program} describe\n\
+         The coordinator starts {program} itself and serves it the scene: to run one, use \
+         `coordinator run SCENE`; `{program} describe` prints the keys and phases it offers."
+    );
     let usage = || {
-        let _ = writeln!(
-            std::io::stderr(),
-            "usage: {program} serve --prefix PREFIX --name NAME | {program} describe"
-        );
+        let _ = writeln!(std::io::stderr(), "{text}");
         ExitCode::from(2)
     };
     match args.first().map(String::as_str) {
+        Some("-h" | "--help" | "help") => {
+            let _ = writeln!(std::io::stdout(), "{text}");
+            ExitCode::SUCCESS
+        }
         Some("describe") => {
             let d = component().describe();
             let text = serde_json::to_string_pretty(&d).expect("a description always serialises");
@@ -32,6 +38,16 @@ pub fn node_main<C: Component>(
                 return usage();
             };
             let mut c = component();
+            // Started by hand rather than by the coordinator (whose nodes write to a pipe),
+            // say what it waits for instead of waiting silently.
+            if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "{program}: serving as `{name}` of run `{prefix}`, waiting for its \
+                     coordinator (Ctrl-C to stop); the coordinator starts its nodes itself: \
+                     `coordinator run SCENE`"
+                );
+            }
             match super::serve(&mut c, &prefix, &name) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
