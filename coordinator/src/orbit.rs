@@ -17,6 +17,7 @@
 //! agrees with it for a straight fibre and is offered for strongly curled shapes, where the
 //! end-to-end vector is short and follows the ends' wiggles.
 
+use cosim::scene_keys::Sig;
 use std::f64::consts::PI;
 
 /// A fibre counts as folded when its end-to-end distance falls below this fraction of its
@@ -689,21 +690,21 @@ fn classify(tail: &Tail, folds: &Folds, min_ratio: f64, beads: usize) -> (OrbitK
     if tail.stuck {
         let creep = if tail.creeping {
             format!(
-                "; but the rate is not falling ({:.3e} deg per time unit over the last \
-                 half of that, {:.3e} before): a steady creep, not settling at an angle; \
+                "; but the rate is not falling ({} deg per time unit over the last \
+                 half of that, {} before): a steady creep, not settling at an angle; \
                  a longer run may see it turn on",
-                tail.late.abs().to_degrees(),
-                tail.early.abs().to_degrees()
+                Sig(tail.late.abs().to_degrees()),
+                Sig(tail.early.abs().to_degrees())
             )
         } else {
             String::new()
         };
         let reason = format!(
-            "mean rate over the last {:.0} % of the run {:.3e} deg per time unit < {:.3e} \
+            "mean rate over the last {:.0} % of the run {} deg per time unit < {} \
              ({} x the slowest Jeffery rate for r_c = 1/{beads})",
             100.0 * STUCK_TAIL_FRACTION,
-            tail.rate.abs().to_degrees(),
-            tail.threshold.to_degrees(),
+            Sig(tail.rate.abs().to_degrees()),
+            Sig(tail.threshold.to_degrees()),
             STUCK_RATE_FRACTION
         );
         (OrbitKind::Stuck, reason + &creep)

@@ -121,7 +121,8 @@ impl Trajectory {
         let e2e0 = self.end_to_end[0];
         if s0 <= 1e-6 * e2e0 {
             return Err(format!(
-                "fibre 0 starts straight (bend {s0:.3e}); give it fibre.0.initial_bend"
+                "fibre 0 starts straight (bend {}); give it fibre.0.initial_bend",
+                cosim::scene_keys::Sig(s0)
             ));
         }
         let target = s0 / std::f64::consts::E;

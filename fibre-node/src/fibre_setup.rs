@@ -339,13 +339,13 @@ fn implicit_exchange_note(
     let per_volume = cfg.density * m_phi / f.mass;
     let how = if cfg.substeps == 1 {
         format!(
-            "its translation is that of a bead of mass M + m_phi = {:.4e} ({:.3} times its own: \
+            "its translation is that of a bead of mass M + m_phi = {} ({:.3} times its own: \
              fibre.{n}.density = {} moves as {:.4}) under the explicit exchange, its spin that \
              of moment of inertia I + I_phi ({:.3} times). For beads of density rho_p above \
              {per_volume:.4}, fibre.{n}.density = rho_p - {per_volume:.4} gives their mass; \
              lighter ones have no implicit equivalent (the explicit exchange runs beads down to \
              half their profile's fluid in mass and moment of inertia)",
-            f.mass + m_phi,
+            Sig(f.mass + m_phi),
             1.0 + m_phi / f.mass,
             cfg.density,
             cfg.density + per_volume,

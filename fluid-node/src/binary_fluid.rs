@@ -61,9 +61,11 @@ pub fn capillary_limit(rho: f64, eta: f64, sigma: f64) -> TimeStepLimit {
         dt_max: 0.5 * (a + (a * a + 4.0 * GV_C1 * tau_rho2).sqrt()),
         detail: format!(
             "dt <= (C2 tau_mu + sqrt((C2 tau_mu)^2 + 4 C1 tau_rho^2)) / 2, Galusinski & \
-             Vigneaux 2008, C1 = {GV_C1}, C2 = {GV_C2}, tau_mu = eta dx / sigma = {tau_mu:.4e}, \
-             tau_rho = sqrt(rho dx^3 / sigma) = {:.4e}, sigma = {sigma:.4e}",
-            tau_rho2.sqrt()
+             Vigneaux 2008, C1 = {GV_C1}, C2 = {GV_C2}, tau_mu = eta dx / sigma = {}, \
+             tau_rho = sqrt(rho dx^3 / sigma) = {}, sigma = {}",
+            cosim::scene_keys::Sig(tau_mu),
+            cosim::scene_keys::Sig(tau_rho2.sqrt()),
+            cosim::scene_keys::Sig(sigma)
         ),
     }
 }

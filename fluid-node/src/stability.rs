@@ -72,11 +72,11 @@ pub fn check(cfg: &FluidConfig) -> Result<Vec<TimeStepLimit>, String> {
     for l in &all {
         if cfg.dt > l.dt_max {
             return Err(format!(
-                "time step too large for the fluid ({} limit): time.dt = {} exceeds {:.6e} \
+                "time step too large for the fluid ({} limit): time.dt = {} exceeds {} \
                  ({}); lower time.dt or the wall speeds",
                 l.name,
                 Num(cfg.dt),
-                l.dt_max,
+                cosim::scene_keys::Sig(l.dt_max),
                 l.detail
             ));
         }
@@ -106,12 +106,12 @@ mod tests {
         assert!((ok[1].dt_max - 100.0).abs() < 1e-9);
         let e = check(&scene(6.0, 0.5, 0.1)).unwrap_err();
         assert!(
-            e.starts_with("time step too large for the fluid (advective CFL limit): time.dt = 6 exceeds 5.000000e0"),
+            e.starts_with("time step too large for the fluid (advective CFL limit): time.dt = 6 exceeds 5 (max|u| dt"),
             "{e}"
         );
         let e = check(&scene(1.0, 0.001, 0.1)).unwrap_err();
         assert!(
-            e.contains("(advection with exact viscosity (explicit Euler) limit): time.dt = 1 exceeds 2.000000e-1"),
+            e.contains("(advection with exact viscosity (explicit Euler) limit): time.dt = 1 exceeds 0.2 ("),
             "{e}"
         );
         assert!(check(&scene(1e3, 0.5, 0.0)).unwrap().is_empty());

@@ -277,7 +277,7 @@ fn refusals_name_the_limit_or_the_key() {
     );
     assert!(
         e.starts_with(
-            "time step too large for the binary fluid (capillary limit): time.dt = 0.5 exceeds 2.58"
+            "time step too large for the binary fluid (capillary limit): time.dt = 0.5 exceeds 0.0258"
         ),
         "{e}"
     );

@@ -104,7 +104,7 @@ fn bad_scenes_are_refused_with_the_key_and_never_panic() {
         "fluid.binary.initial: required key is missing",
         "fluid.grid: a 2D scene expects [nx, ny], got [48, 40, 3]",
         "walls.colour: unknown key (set to 3); expected one of `velocity`, `thickness`",
-        "time step too large for the fluid (advective CFL limit): time.dt = 30 exceeds 2.500000e1",
+        "time step too large for the fluid (advective CFL limit): time.dt = 30 exceeds 25 (",
         "fluid.extra: unknown key (set to a table)",
         "the scene is not valid TOML",
         "fibre.0.bead_radius: 30 plus fluid.xi_cutoff 3 needs a grid of at least 68 nodes",
