@@ -427,4 +427,11 @@ fn a_refused_scene_leaves_the_earlier_run_in_its_folder() {
         }
     }
     let _ = std::fs::remove_dir_all(&out);
+    // Into a folder that did not exist, a refused scene leaves none behind.
+    let o = run_command(&p, &out)
+        .args(["--set", "fibre.0.youngs_modulu=1", "--in-process"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(!out.exists(), "a refused scene left {}", out.display());
 }

@@ -173,9 +173,10 @@ fn execute(cmd: Cmd) -> Result<(), String> {
         } => {
             let n = study::check_file(&study)?;
             println!(
-                "ok: {} variants of {} check; nothing was run",
-                n,
-                study.display()
+                "ok: {n} variant{} of {} check{}; nothing was run",
+                if n == 1 { "" } else { "s" },
+                study.display(),
+                if n == 1 { "s" } else { "" }
             );
             Ok(())
         }
@@ -320,8 +321,14 @@ fn export_run(
 }
 
 fn print_result(summary: &serde_json::Value, out: &std::path::Path) {
+    // A resumed run counts its steps from step 0 and its seconds from the resume.
+    let resumed = summary["resumed_from_step"]
+        .as_u64()
+        .map_or(String::new(), |n| {
+            format!(", steps {n} to {} in this run", summary["steps"])
+        });
     println!(
-        "{}: {} steps in {:.2} s ({})",
+        "{}: {} steps in {:.2} s ({}{resumed})",
         summary["status"].as_str().unwrap_or("?"),
         summary["steps"],
         summary["wall_seconds"].as_f64().unwrap_or(0.0),
@@ -331,12 +338,22 @@ fn print_result(summary: &serde_json::Value, out: &std::path::Path) {
         for (name, v) in m {
             match (v["reference"].as_f64(), v["relative_error"].as_f64()) {
                 (Some(r), Some(e)) => {
-                    println!(
-                        "  {name} = {} (reference {}, relative error {:.2} %)",
-                        Sig(v["value"].as_f64().unwrap_or(f64::NAN)),
-                        Sig(r),
-                        100.0 * e
-                    );
+                    let value = v["value"].as_f64().unwrap_or(f64::NAN);
+                    if r == 0.0 {
+                        // Metric::with_reference keeps the absolute error there.
+                        println!(
+                            "  {name} = {} (reference 0, absolute error {})",
+                            Sig(value),
+                            Sig(e)
+                        );
+                    } else {
+                        println!(
+                            "  {name} = {} (reference {}, relative error {:.2} %)",
+                            Sig(value),
+                            Sig(r),
+                            100.0 * e
+                        );
+                    }
                     if let Some(note) = v["note"].as_str().filter(|n| !n.is_empty()) {
                         println!("    {note}");
                     }

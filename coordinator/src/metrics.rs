@@ -434,6 +434,10 @@ fn tumbling_period(ctx: &Context) -> Result<Metric, String> {
     Ok(m)
 }
 
+/// The `orbit` label of a run too short to tell the orbit: less than a half-turn, not
+/// stuck, and no fold undone (value null).
+pub const UNDETERMINED_ORBIT: &str = "undetermined";
+
 /// S2023's Jeffery fit for a rigid chain of 10 beads at C = 0.2, Re_ps << 1 (Fig. 5a).
 const S2023_RIGID_ASPECT_RATIO: f64 = 0.132;
 
@@ -464,11 +468,26 @@ fn orbit_metrics(ctx: &Context) -> Result<BTreeMap<&'static str, Metric>, String
         (_, Some("s-stuck")) => 5.0,
         _ => 4.0,
     };
-    let mut orbit = plain(regime);
-    orbit.label = Some(a.kind.as_str().to_string());
-    orbit.note = match a.stuck_kind {
-        Some(k) => format!("{k}: {}", a.reason),
-        None => a.reason.clone(),
+    // Less than a half-turn and not stuck: a fold seen and undone is an S-turn, but a fibre
+    // still straight may fold later, and one still folded may straighten (S2023 classify
+    // over whole turns).
+    let premature = a.stuck_kind.is_none()
+        && a.net_rotation_deg.abs() < 180.0
+        && !matches!(a.kind, crate::orbit::OrbitKind::STurn);
+    let mut orbit = plain(if premature { f64::NAN } else { regime });
+    orbit.label = Some(if premature {
+        UNDETERMINED_ORBIT.to_string()
+    } else {
+        a.kind.as_str().to_string()
+    });
+    orbit.note = match (a.stuck_kind, premature) {
+        (Some(k), _) => format!("{k}: {}", a.reason),
+        (None, true) => format!(
+            "too short to classify (it would read {} so far): {}",
+            a.kind.as_str(),
+            a.reason
+        ),
+        (None, false) => a.reason.clone(),
     };
     orbit.extra = scalars.clone();
     orbit.extra.insert("folds".into(), a.folds as f64);

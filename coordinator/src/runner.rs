@@ -378,11 +378,19 @@ pub fn run(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError
 
 fn run_on_this_thread(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResult, RunError> {
     INTERRUPTED.store(false, Ordering::SeqCst);
+    let created = !opts.out.exists();
     writable_dir(&opts.out)?;
-    let plan = schedule::plan(scene).map_err(fail)?;
+    // A scene refused before the run starts leaves no folder the run made.
+    let refused = |e: RunError| {
+        if created {
+            let _ = std::fs::remove_dir(&opts.out);
+        }
+        e
+    };
+    let plan = schedule::plan(scene).map_err(fail).map_err(refused)?;
     // A checkpoint that does not fit the scene is refused before anything changes.
     let checkpoint = match &opts.resume {
-        Some(dir) => Some(check_resume(scene, dir, scene.scene.time.steps)?),
+        Some(dir) => Some(check_resume(scene, dir, scene.scene.time.steps).map_err(refused)?),
         None => None,
     };
     let started = Instant::now();
@@ -393,12 +401,12 @@ fn run_on_this_thread(scene: &LoadedScene, opts: &RunOptions) -> Result<RunResul
         cosim::ipc::cleanup_stale_resources();
     }
     let prefix = cosim::ipc::new_run_prefix();
-    let mut nodes = start_nodes(&plan, in_process, &prefix, opts.node_timeout)?;
+    let mut nodes = start_nodes(&plan, in_process, &prefix, opts.node_timeout).map_err(refused)?;
     let configured = match describe_and_configure(scene, &plan, &mut nodes) {
         Ok(c) => c,
         Err(e) => {
             let _ = shutdown_all(nodes);
-            return Err(e);
+            return Err(refused(e));
         }
     };
 
@@ -547,7 +555,18 @@ impl RunState {
         let largest_self_overlap = has_fibres.then(|| largest(&self.watches.self_watch));
         let largest_fibre_overlap =
             (scene.scene.fibre.len() > 1).then(|| largest(&self.watches.fibre_watch));
-        let warnings = overlap_warnings(scene, &self.watches);
+        let mut warnings = overlap_warnings(scene, &self.watches);
+        // A scene that runs to rest but ran out of steps first: its static metrics are of
+        // a fibre still moving.
+        if let (Some(tol), "completed") = (scene.scene.time.rest_tolerance, status) {
+            warnings.push(format!(
+                "the run reached time.steps = {} before coming to rest (time.rest_tolerance = \
+                 {}): the fibres were still moving, and metrics of a state at rest describe \
+                 the last step instead; raise time.steps",
+                scene.scene.time.steps,
+                cosim::scene_keys::Num(tol)
+            ));
+        }
         json!({
             "scene": scene.name(),
             "scene_file": scene.path.as_ref().map(|p| p.display().to_string()),

@@ -314,9 +314,14 @@ fn check_ranges(s: &Scene) -> Result<(), SceneError> {
     Ok(())
 }
 
+/// The coordinator's tables a scene may leave out, which `--set` may start
+/// (`--set output.fields_interval=100` on a scene without `[output]`).
+const OPTIONAL_TABLES: &[&str] = &["output", "analysis"];
+
 /// Apply one `PATH=VALUE` override. PATH is dotted, array indices are numbers
 /// (`fibre.0.beads`); VALUE is a TOML value (`12`, `1e-3`, `[-0.01, 0.01]`, `"bead-spring"`),
-/// or a bare word taken as a string. Every component of PATH but the last must exist.
+/// or a bare word taken as a string. Every component of PATH but the last must exist, except
+/// the optional tables [`OPTIONAL_TABLES`], which are started.
 pub fn apply_override(root: &mut toml::Value, spec: &str) -> Result<(), SceneError> {
     let (path, raw) = spec.split_once('=').ok_or_else(|| {
         err(format!(
@@ -324,7 +329,7 @@ pub fn apply_override(root: &mut toml::Value, spec: &str) -> Result<(), SceneErr
         ))
     })?;
     let path = path.trim();
-    let value = parse_value(raw.trim());
+    let value = parse_value(raw.trim()).map_err(|e| err(format!("--set {spec}: {e}")))?;
     let parts: Vec<&str> = path.split('.').collect();
     if parts.iter().any(|p| p.is_empty()) {
         return Err(err(format!("--set {spec}: `{path}` is not a dotted path")));
@@ -338,6 +343,10 @@ pub fn apply_override(root: &mut toml::Value, spec: &str) -> Result<(), SceneErr
                 if last {
                     t.insert((*part).to_string(), value);
                     return Ok(());
+                }
+                // The coordinator's optional tables may be absent from the scene: start them.
+                if i == 0 && OPTIONAL_TABLES.contains(part) && !t.contains_key(*part) {
+                    t.insert((*part).to_string(), toml::Value::Table(toml::Table::new()));
                 }
                 if !t.contains_key(*part) {
                     return Err(err(format!(
@@ -387,13 +396,19 @@ fn keys(t: &toml::Table) -> String {
     }
 }
 
-fn parse_value(raw: &str) -> toml::Value {
+/// A `--set` value: TOML, or a bare word taken as a string; an array, inline table or quoted
+/// string that is not valid TOML is refused (it is no bare word).
+fn parse_value(raw: &str) -> Result<toml::Value, String> {
     let doc = format!("v = {raw}");
     match doc.parse::<toml::Table>() {
-        Ok(mut t) => t
+        Ok(mut t) => Ok(t
             .remove("v")
-            .unwrap_or(toml::Value::String(raw.to_string())),
-        Err(_) => toml::Value::String(raw.to_string()),
+            .unwrap_or(toml::Value::String(raw.to_string()))),
+        Err(e) if raw.starts_with(['[', '{', '"', '\'']) => Err(format!(
+            "`{raw}` is not a valid TOML value: {}",
+            e.message().trim()
+        )),
+        Err(_) => Ok(toml::Value::String(raw.to_string())),
     }
 }
 
@@ -431,6 +446,15 @@ mod tests {
         assert!(e.contains("time.dt"), "{e}");
         let e = apply_override(&mut v, "time.dt").unwrap_err().0;
         assert!(e.contains("PATH=VALUE"), "{e}");
+        // The coordinator's optional tables are started; others are not.
+        apply_override(&mut v, "output.fields_interval=100").unwrap();
+        assert_eq!(v["output"]["fields_interval"].as_integer(), Some(100));
+        apply_override(&mut v, "analysis.metrics=[\"tip_rotation\"]").unwrap();
+        assert!(apply_override(&mut v, "outputs.interval=3").is_err());
+        let e = apply_override(&mut v, "fibre.0.start=[48, 28")
+            .unwrap_err()
+            .0;
+        assert!(e.contains("not a valid TOML value"), "{e}");
     }
 
     #[test]

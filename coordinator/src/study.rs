@@ -258,9 +258,13 @@ fn load(path: &Path) -> Result<(Study, PathBuf), String> {
 /// markdown table and a line naming the files written.
 pub fn run_file(path: &Path, out: Option<&Path>, runs: Runs) -> Result<String, String> {
     let (study, base) = load(path)?;
-    let out_dir = out
-        .map(Path::to_path_buf)
-        .unwrap_or_else(|| base.join(&study.output));
+    // Without `./` in the middle of the names printed (`output = "."`).
+    let out_dir = out.map(Path::to_path_buf).unwrap_or_else(|| {
+        base.join(&study.output)
+            .components()
+            .filter(|c| !matches!(c, std::path::Component::CurDir))
+            .collect()
+    });
     run(&study, &base.join(&study.scene), &out_dir, runs)
 }
 

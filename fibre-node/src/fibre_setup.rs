@@ -251,14 +251,15 @@ fn too_large_for_the_beam(
     format!(
         "time step too large for fibre.{n} (beam stiffness limit): \
          time.dt / fibre.{n}.substeps = {} / {} = {} exceeds the stable fibre step \
-         {} (symplectic Euler, omega_max = {}, damping {}, 2 % margin); \
+         {} (symplectic Euler, omega_max = {}, damping rate {} of the fastest mode, 2 % \
+         margin); \
          lower time.dt to at most {}{advice}",
         Num(scene.dt),
         cfg.substeps,
         Sig(h),
         Sig(h_ok),
         Sig(lim.omega_max),
-        Num(lim.damping),
+        Sig(lim.damping),
         AtMost(lim.dt_limit)
     )
 }
