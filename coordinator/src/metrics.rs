@@ -394,7 +394,15 @@ fn tumbling_period(ctx: &Context) -> Result<Metric, String> {
         .beads_per_fibre
         .first()
         .ok_or("the scene has no fibre")?;
-    let harris_pittman = crate::reference::jeffery::chain_period_gamma(n);
+    // The chain's envelope: N_b for touching beads, longer for beads spaced apart.
+    let aspect = match (
+        fibre0_bead_radius(ctx),
+        lookup(ctx.derived, "fibre.0.length"),
+    ) {
+        (Some(r), Some(l)) if r > 0.0 => (l + 2.0 * r) / (2.0 * r),
+        _ => n as f64,
+    };
+    let harris_pittman = crate::reference::jeffery::cylinder_period_gamma(aspect);
     let stokes_chain = match (stokes_2d_chain(ctx, n), stokes_3d_chain(ctx, n)) {
         (Some(b), _) => Some((
             stokes::period_gamma(b),
@@ -416,12 +424,23 @@ fn tumbling_period(ctx: &Context) -> Result<Metric, String> {
             m.extra.insert("harris_pittman".into(), harris_pittman);
             m
         }
-        None => Metric::with_reference(
-            gamma * period,
-            harris_pittman,
-            "Jeffery, gamma T = 2 pi (e + 1/e) with the equivalent ellipse e = 1.14 \
-             N_b^0.844 of Harris & Pittman (L2020 appendix B)",
-        ),
+        None => {
+            let mut m = Metric::with_reference(gamma * period, harris_pittman, "");
+            m.reference_source = format!(
+                "Jeffery, gamma T = 2 pi (e + 1/e) with the equivalent ellipse e = 1.14 \
+                 p^0.844 of Harris & Pittman (L2020 appendix B) for the chain's aspect ratio \
+                 p = (L + 2 r_b) / (2 r_b) = {}",
+                cosim::scene_keys::Sig(aspect)
+            );
+            // Say so: the Stokes references cover the scenes of docs/validation/spm.md.
+            m.note = format!(
+                "reference: Harris & Pittman's law for a cylinder of aspect ratio {} (the \
+                 Stokes solutions here are for straight chains of touching beads, 2 to \
+                 {MAX_STOKES_BEADS} in 2D and to {MAX_STOKES_BEADS_3D} in 3D)",
+                cosim::scene_keys::Sig(aspect)
+            );
+            m
+        }
     };
     m.extra.insert(
         "reference_md_table".into(),

@@ -18,6 +18,14 @@ pub fn chain_equivalent_aspect_ratio(beads: usize) -> f64 {
     1.14 * (beads as f64).powf(0.844)
 }
 
+/// gamma T of a full Jeffery period for a cylinder of aspect ratio `aspect` (length over
+/// width), with Harris & Pittman's equivalent ellipse `e = 1.14 aspect^0.844`: for a chain of
+/// beads spaced apart, the cylinder that envelops it.
+pub fn cylinder_period_gamma(aspect: f64) -> f64 {
+    let e = 1.14 * aspect.powf(0.844);
+    2.0 * std::f64::consts::PI * (e + 1.0 / e)
+}
+
 /// gamma T of a full Jeffery period (a turn by 2 pi) for a chain of `beads` beads, with the
 /// equivalent ellipse of [`chain_equivalent_aspect_ratio`].
 pub fn chain_period_gamma(beads: usize) -> f64 {
@@ -35,6 +43,16 @@ pub fn chain_period_gamma_table(beads: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A chain of touching beads is a cylinder of aspect ratio N_b; spacing the beads apart
+    /// lengthens it and slows its turn.
+    #[test]
+    fn a_chain_is_the_cylinder_that_envelops_it() {
+        for n in 2..=16 {
+            assert_eq!(cylinder_period_gamma(n as f64), chain_period_gamma(n));
+        }
+        assert!(cylinder_period_gamma(7.25) > chain_period_gamma(6));
+    }
 
     /// REFERENCE.md section 2 table: N_b 3 -> 21.8, ..., 9 -> 73.2.
     #[test]
