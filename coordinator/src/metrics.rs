@@ -29,6 +29,52 @@ pub const KNOWN: &[&str] = &[
     "curvature_radius_over_droplet_radius",
 ];
 
+/// What metric `name` needs of `scene` that the scene lacks, in words (`None`: nothing
+/// missing), so that `check` refuses a metric no run of the scene could compute. Only the
+/// tables are checked here; the run says what else is missing (a load, a long enough run).
+pub fn unmet_need(name: &str, scene: &crate::scene::Scene) -> Option<&'static str> {
+    let orbit = ORBIT_METRICS.contains(&name);
+    let walls = orbit || matches!(name, "couette_max_error" | "tumbling_period_gamma");
+    let fluid = walls || matches!(name, "drag_ratio" | "drag_coefficient");
+    let binary = matches!(
+        name,
+        "surface_tension"
+            | "contact_angle_deg"
+            | "laplace_pressure_jump"
+            | "final_tilt_deg"
+            | "wrap"
+            | "curvature_radius_over_droplet_radius"
+    );
+    let fibre = orbit
+        || matches!(
+            name,
+            "tip_deflection_over_length"
+                | "tip_rotation"
+                | "twist_angle"
+                | "tumbling_period_gamma"
+                | "min_end_to_end_over_length"
+                | "bend_relaxation_time"
+                | "final_tilt_deg"
+                | "wrap"
+                | "curvature_radius_over_droplet_radius"
+        );
+    let has_binary = scene
+        .fluid
+        .as_ref()
+        .is_some_and(|f| f.contains_key("binary"));
+    if fluid && scene.fluid.is_none() {
+        Some("needs a fluid ([fluid])")
+    } else if walls && scene.walls.is_none() {
+        Some("needs walls ([walls] velocity = [bottom, top])")
+    } else if binary && !has_binary {
+        Some("needs a binary fluid ([fluid.binary])")
+    } else if fibre && scene.fibre.is_empty() {
+        Some("needs a fibre ([[fibre]])")
+    } else {
+        None
+    }
+}
+
 /// The orbit metrics (S2023 section IV), computed together by [`crate::orbit`].
 const ORBIT_METRICS: &[&str] = &[
     "orbit",

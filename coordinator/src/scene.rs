@@ -310,6 +310,11 @@ fn check_ranges(s: &Scene) -> Result<(), SceneError> {
                 crate::metrics::KNOWN.join(", ")
             )));
         }
+        if let Some(why) = crate::metrics::unmet_need(m, s) {
+            return Err(err(format!(
+                "key `analysis.metrics`: metric `{m}` {why}, which the scene has not"
+            )));
+        }
     }
     Ok(())
 }
@@ -480,6 +485,40 @@ mod tests {
             .unwrap_err()
             .0;
         assert!(e.contains("dimensions"), "{e}");
+    }
+
+    /// A metric the scene's tables cannot give is refused with what it needs.
+    #[test]
+    fn metrics_the_scene_cannot_give_are_refused() {
+        let base = "[time]\ndt = 0.1\nsteps = 3\n[[fibre]]\nbeads = 3\n";
+        let e = |m: &str| {
+            from_text(
+                &format!("{base}[analysis]\nmetrics = [\"{m}\"]\n"),
+                "s",
+                &[],
+            )
+            .err()
+            .map(|e| e.0)
+        };
+        assert!(e("tip_rotation").is_none());
+        assert!(e("drag_ratio").unwrap().contains("needs a fluid ([fluid])"));
+        assert!(e("orbit").unwrap().contains("needs a fluid"));
+        assert!(e("laplace_pressure_jump")
+            .unwrap()
+            .contains("[fluid.binary]"));
+        let walls = |m: &str| {
+            from_text(
+                &format!("{base}[fluid]\ngrid = [8, 8]\n[analysis]\nmetrics = [\"{m}\"]\n"),
+                "s",
+                &[],
+            )
+            .err()
+            .map(|e| e.0)
+        };
+        assert!(walls("tumbling_period_gamma")
+            .unwrap()
+            .contains("needs walls"));
+        assert!(walls("drag_ratio").is_none());
     }
 
     /// Values of the wrong kind and tables with the wrong brackets are named in plain words,

@@ -275,7 +275,27 @@ pub fn check_file(path: &Path) -> Result<usize, String> {
     let (study, base) = load(path)?;
     let variants = prepare(&study, &base.join(&study.scene))?;
     for v in &variants {
-        runner::check(&v.scene).map_err(|e| format!("variant {}: {e}", v.label))?;
+        let (_, configured, _) =
+            runner::check(&v.scene).map_err(|e| format!("variant {}: {e}", v.label))?;
+        // The plot's axes are derived values (a run reports the same ones `check` does).
+        let axes = study.curve.iter().map(|c| ("curve.x", &c.x)).chain(
+            study
+                .diagram
+                .iter()
+                .flat_map(|d| [("diagram.x", &d.x), ("diagram.y", &d.y)]),
+        );
+        for (key, name) in axes {
+            if !configured.derived.iter().any(|(k, _)| k == name) {
+                let known: Vec<&str> = configured.derived.iter().map(|(k, _)| k.as_str()).collect();
+                return Err(format!(
+                    "{key} = `{name}` is not among the derived values of variant {}{} (they are: \
+                     {})",
+                    v.label,
+                    cosim::scene_keys::did_you_mean(name, known.iter().copied()),
+                    known.join(", ")
+                ));
+            }
+        }
     }
     Ok(variants.len())
 }
