@@ -243,13 +243,36 @@ fn load(path: &Path) -> Result<(Study, PathBuf), String> {
             )
         })?)
         .map_err(|e| {
-            crate::scene::key_message(
+            let msg = crate::scene::key_message(
                 &path.display().to_string(),
                 &e.path().to_string(),
                 &e.inner().to_string(),
                 (&["vary"], &["set", "diagram", "convergence", "curve"]),
-            )
+            );
+            // A scene given where a study was meant.
+            match text.parse::<toml::Table>() {
+                Ok(t) if t.contains_key("time") && !t.contains_key("vary") => format!(
+                    "{msg}; {} looks like a scene (it has [time]): run it with `coordinator \
+                     run`, or name it as `scene` in a study file",
+                    path.display()
+                ),
+                _ => msg,
+            }
         })?;
+    // The name names the study's files and its runs' folder.
+    if study.name.is_empty()
+        || study
+            .name
+            .contains(|c: char| c == '/' || c == '\\' || c.is_control())
+        || study.name == "."
+        || study.name == ".."
+    {
+        return Err(format!(
+            "{}: key `name`: expected a file name (no `/`), got \"{}\"",
+            path.display(),
+            study.name
+        ));
+    }
     let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     Ok((study, base))
 }
@@ -461,9 +484,17 @@ fn prepare(study: &Study, scene_path: &Path) -> Result<Vec<Variant>, String> {
         let scene = crate::scene::load(Some(scene_path), &overrides)
             .map_err(|e| format!("variant {label}: {e}"))?;
         if !scene.scene.analysis.metrics.contains(&study.metric) {
+            let asked = &scene.scene.analysis.metrics;
             return Err(format!(
-                "the study's metric `{}` is not in the scene's analysis.metrics",
-                study.metric
+                "the study's metric `{}` is not in the scene's analysis.metrics{} (the scene \
+                 asks for: {}; add it with [set] \"analysis.metrics\" = [...])",
+                study.metric,
+                cosim::scene_keys::did_you_mean(&study.metric, asked.iter().map(String::as_str)),
+                if asked.is_empty() {
+                    "none".to_string()
+                } else {
+                    asked.join(", ")
+                }
             ));
         }
         let run_dir = PathBuf::from("runs")
@@ -645,11 +676,13 @@ fn write_outputs(study: &Study, rows: &[Row], note: &str, out: &Path) -> Result<
         out.join(format!("{}.md", study.name)),
     ];
     let curve_name = study.curve.as_ref().map(|c| c.x.as_str());
-    let csv = render_csv(rows, curve_name);
-    std::fs::write(out.join(format!("{}.csv", study.name)), &csv).map_err(|e| e.to_string())?;
+    let write = |path: &Path, text: &str| {
+        std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    };
+    write(&written[0], &render_csv(rows, curve_name))?;
     let title = study.title.clone().unwrap_or_else(|| study.name.clone());
     let md = render_markdown(&title, &study.metric, rows, curve_name) + note;
-    std::fs::write(out.join(format!("{}.md", study.name)), &md).map_err(|e| e.to_string())?;
+    write(&written[1], &md)?;
     let points: Vec<crate::plot::CostPoint> = rows
         .iter()
         .filter_map(|r| {

@@ -109,12 +109,18 @@ fn plain_words_of_line(msg: &str) -> String {
         let (expected, got) = (kind(expected), value(got));
         // A number in quotes is text.
         let numeric = expected.contains("number") || expected.starts_with('[');
-        let quotes = if numeric && got.starts_with("the text ") {
-            " (numbers are written without quotes)"
+        let hint = if numeric && got.starts_with("the text ") {
+            " (numbers are written without quotes)".to_string()
+        } else if expected.starts_with("a whole number")
+            && got.parse::<f64>().is_ok_and(|x| x.fract() == 0.0)
+            && got.contains(['.', 'e', 'E'])
+        {
+            // 4.5e4 or 100.0 reads as a float in TOML.
+            " (a float: write it without a decimal point or exponent)".to_string()
         } else {
-            ""
+            String::new()
         };
-        return format!("expected {expected}, got {got}{quotes}");
+        return format!("expected {expected}, got {got}{hint}");
     }
     if let Some((n, expected)) = msg
         .strip_prefix("invalid length ")
@@ -659,6 +665,11 @@ mod tests {
                 "expected true or false, got 1",
             ),
             ("something else entirely", "something else entirely"),
+            (
+                "invalid type: floating point `45000.0`, expected u64",
+                "expected a whole number (0 or more), got 45000.0 (a float: write it without a \
+                 decimal point or exponent)",
+            ),
             (
                 "TOML parse error at line 19, column 1\n   |\n19 | [vary]\n   | ^^^^^^\n\
                  invalid type: map, expected a sequence\n",
