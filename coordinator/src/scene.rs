@@ -321,7 +321,7 @@ fn check_ranges(s: &Scene) -> Result<(), SceneError> {
 
 /// The coordinator's tables a scene may leave out, which `--set` may start
 /// (`--set output.fields_interval=100` on a scene without `[output]`).
-const OPTIONAL_TABLES: &[&str] = &["output", "analysis"];
+pub const OPTIONAL_TABLES: &[&str] = &["output", "analysis"];
 
 /// Apply one `PATH=VALUE` override. PATH is dotted, array indices are numbers
 /// (`fibre.0.beads`); VALUE is a TOML value (`12`, `1e-3`, `[-0.01, 0.01]`, `"bead-spring"`),
