@@ -233,18 +233,20 @@ pub fn key_message(
     (arrays_of_tables, tables): (&[&str], &[&str]),
 ) -> String {
     let (first, _) = cosim::scene_keys::message_line(inner);
+    let whole_file = path == "." || path.is_empty();
+    let at = if whole_file {
+        format!("{origin}: ")
+    } else {
+        format!("{origin}: key `{path}`: ")
+    };
     if let Some(unknown) = cosim::scene_keys::unknown_key(inner) {
-        return if path == "." || path.is_empty() {
-            format!("{origin}: {unknown}")
-        } else {
-            format!("{origin}: key `{path}`: {unknown}")
-        };
+        return format!("{at}{unknown}");
     }
     if let Some(field) = first
         .strip_prefix("missing field `")
         .and_then(|r| r.split('`').next())
     {
-        let full = if path == "." || path.is_empty() {
+        let full = if whole_file {
             field.to_string()
         } else {
             format!("{path}.{field}")
@@ -268,11 +270,7 @@ pub fn key_message(
     } else {
         String::new()
     };
-    if path == "." || path.is_empty() {
-        format!("{origin}: {plain}{hint}")
-    } else {
-        format!("{origin}: key `{path}`: {plain}{hint}")
-    }
+    format!("{at}{plain}{hint}")
 }
 
 fn check_ranges(s: &Scene) -> Result<(), SceneError> {
