@@ -480,7 +480,7 @@ impl Component for FibreComponent {
                 param("fibre.N.model", "1", None, "\"cohesive-beam\" (L2020) or \"bead-spring\" (S2023)"),
                 param("fibre.N.beads", "1", None, "number of beads N_b (1: a single rigid particle)"),
                 param("fibre.N.bead_radius", len, None, "bead radius r_b"),
-                param("fibre.N.youngs_modulus", "mass / (length time^2)", None, "Young's modulus E; EI with I = pi r_b^4 / 4"),
+                param("fibre.N.youngs_modulus", "mass / (length time^2)", None, "Young's modulus E; EI with I = pi r_b^4 / 4; a bead-spring fibre reads it only for the constants its table leaves out (k_s, k_b), and one given both needs none"),
                 param("fibre.N.shear_modulus", "mass / (length time^2)", Some("E / 2.6"), "shear modulus G (torsion, cohesive beam in 3D); the default is E / (2 (1 + nu)) with Poisson's ratio nu = 0.3"),
                 param("fibre.N.density", "mass / length^3", Some("1.0"), "bead density; 3D sphere m = rho 4/3 pi r^3, 2D disc of unit thickness m = rho pi r^2"),
                 param("fibre.N.start", len, Some("[0.0, 0.0, 0.0]"), "position of bead 0"),

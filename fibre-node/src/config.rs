@@ -46,8 +46,11 @@ pub struct FibreConfig {
     pub model: ModelKind,
     pub beads: usize,
     pub bead_radius: f64,
-    pub youngs_modulus: f64,
-    pub shear_modulus: f64,
+    /// Young's modulus E; `None` only for a bead-spring fibre whose table gives both of its
+    /// constants (`k_s` and `k_b`), which then need no modulus.
+    pub youngs_modulus: Option<f64>,
+    /// Shear modulus G: as given, else `E / (2 (1 + nu))`; `None` where E is.
+    pub shear_modulus: Option<f64>,
     pub density: f64,
     pub start: [f64; 3],
     /// `centred = true`: `start` is set so that the fibre's midpoint lies at the centre of the
@@ -526,7 +529,7 @@ youngs_modulus = 100.0
         assert_eq!(f.spacing, 2.0);
         assert_eq!(f.density, 1.0);
         assert_eq!(f.direction, [1.0, 0.0, 0.0]);
-        assert!((f.shear_modulus - 100.0 / 2.6).abs() < 1e-12);
+        assert!((f.shear_modulus.unwrap() - 100.0 / 2.6).abs() < 1e-12);
         assert_eq!(f.substeps, 1);
         assert!(f.clamp.is_empty() && f.loads.is_empty());
     }
@@ -584,6 +587,39 @@ youngs_modulus = 1.0
         assert_eq!(f.bending_number, Some(3.3));
         let kb = f.bending_stiffness.unwrap();
         assert!((kb - 2.64).abs() < 1e-12, "{kb}");
+    }
+
+    /// `youngs_modulus` is required by the cohesive beam, and by a bead-spring fibre only for
+    /// the constants (k_s, k_b) its table leaves out; the refusal names those.
+    #[test]
+    fn a_bead_spring_fibre_given_both_constants_needs_no_modulus() {
+        let no_e = FPD_SHEAR.replace("youngs_modulus = 1.0\n", "");
+        let s = parse_scene(&format!(
+            "{no_e}stretch_number = 480\nbending_number = 3.3\n"
+        ))
+        .unwrap();
+        let f = &s.fibres[0];
+        assert_eq!((f.youngs_modulus, f.shear_modulus), (None, None));
+        let chain = crate::fibre::Fibre::straight(f, 2, true);
+        match chain.model {
+            crate::fibre::Model::BeadSpring(b) => {
+                assert_eq!(Some(b.k_s), f.stretch_stiffness);
+                assert_eq!(Some(b.k_b), f.bending_stiffness);
+            }
+            _ => panic!("a bead-spring chain"),
+        }
+        let e = parse_scene(&format!("{no_e}bending_stiffness = 0.4\n")).unwrap_err();
+        assert_eq!(
+            e,
+            "fibre.0.youngs_modulus is required and missing: a bead-spring fibre takes from it \
+             the constants of S2023 eq. 9 that its table does not give, here k_s; give \
+             youngs_modulus, or give k_s (stretch_stiffness or stretch_number)"
+        );
+        let e = parse_scene(&no_e.replace("bead-spring", "cohesive-beam")).unwrap_err();
+        assert!(
+            e.starts_with("fibre.0.youngs_modulus is required and missing: the cohesive beam"),
+            "{e}"
+        );
     }
 
     /// `bead_spin = "chord"` is read for a bead-spring fibre under SPM, 2D or 3D, with

@@ -255,9 +255,10 @@ impl Fibre {
         let (model, q0, rotates, elastic_torques) = match cfg.model {
             ModelKind::CohesiveBeam => (
                 Model::CohesiveBeam({
+                    const VALIDATED: &str = "validate_fibre: a cohesive beam has a modulus";
                     let mut b = CohesiveBeam::new(
-                        cfg.youngs_modulus,
-                        cfg.shear_modulus,
+                        cfg.youngs_modulus.expect(VALIDATED),
+                        cfg.shear_modulus.expect(VALIDATED),
                         cfg.bead_radius,
                         cfg.spacing,
                         planar,
@@ -272,14 +273,24 @@ impl Fibre {
                 true,
             ),
             ModelKind::BeadSpring => {
-                let mut m =
-                    BeadSpring::from_modulus(cfg.youngs_modulus, cfg.bead_radius, cfg.spacing);
-                if let Some(ks) = cfg.stretch_stiffness {
-                    m.k_s = ks;
-                }
-                if let Some(kb) = cfg.bending_stiffness {
-                    m.k_b = kb;
-                }
+                // Each constant as given, else from E (validate_fibre asks for E unless both
+                // are given).
+                let from_e = |e: Option<f64>| {
+                    BeadSpring::from_modulus(
+                        e.expect("validate_fibre: a bead-spring fibre lacking k_s or k_b has E"),
+                        cfg.bead_radius,
+                        cfg.spacing,
+                    )
+                };
+                let m = BeadSpring {
+                    rest_length: cfg.spacing,
+                    k_s: cfg
+                        .stretch_stiffness
+                        .unwrap_or_else(|| from_e(cfg.youngs_modulus).k_s),
+                    k_b: cfg
+                        .bending_stiffness
+                        .unwrap_or_else(|| from_e(cfg.youngs_modulus).k_b),
+                };
                 (Model::BeadSpring(m), identity(), with_fluid, false)
             }
         };

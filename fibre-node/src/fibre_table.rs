@@ -14,7 +14,7 @@ pub(crate) struct RawFibre {
     model: String,
     beads: i64,
     bead_radius: f64,
-    youngs_modulus: f64,
+    youngs_modulus: Option<f64>,
     shear_modulus: Option<f64>,
     density: Option<f64>,
     start: Option<[f64; 3]>,
@@ -131,12 +131,9 @@ pub(crate) fn validate_fibre(
     let model = model_kind(p, &raw.model)?;
     let beads = bead_count(p, raw.beads)?;
     let bead_radius = positive(&format!("{p}.bead_radius"), raw.bead_radius)?;
-    let youngs_modulus = positive(&format!("{p}.youngs_modulus"), raw.youngs_modulus)?;
-    let shear_modulus = raw
-        .shear_modulus
-        .map(|g| positive(&format!("{p}.shear_modulus"), g))
-        .transpose()?
-        .unwrap_or(youngs_modulus / (2.0 * (1.0 + DEFAULT_POISSON_RATIO)));
+    let youngs_modulus = elastic_modulus(p, model, &raw)?;
+    let shear_modulus = optional(p, "shear_modulus", raw.shear_modulus, positive)?
+        .or(youngs_modulus.map(|e| e / (2.0 * (1.0 + DEFAULT_POISSON_RATIO))));
     let wall_contact = wall_contact(p, raw.wall_contact, wall_faces)?;
     let density = optional(p, "density", raw.density, positive)?.unwrap_or(1.0);
     let (start, direction) = placement(p, &raw, dims)?;
@@ -213,6 +210,48 @@ fn optional(
     check: fn(&str, f64) -> Result<f64, String>,
 ) -> Result<Option<f64>, String> {
     value.map(|x| check(&format!("{p}.{key}"), x)).transpose()
+}
+
+/// `youngs_modulus`: required by the cohesive beam; a bead-spring fibre reads it only for the
+/// constants its scene does not give (`k_s` from `stretch_stiffness` or `stretch_number`,
+/// `k_b` from `bending_stiffness` or `bending_number`), so there it may be left out when both
+/// are given.
+fn elastic_modulus(p: &str, model: ModelKind, raw: &RawFibre) -> Result<Option<f64>, String> {
+    let key = format!("{p}.youngs_modulus");
+    if let Some(e) = raw.youngs_modulus {
+        return positive(&key, e).map(Some);
+    }
+    if model == ModelKind::CohesiveBeam {
+        return Err(format!(
+            "{key} is required and missing: the cohesive beam's stiffnesses all come from it \
+             (Young's modulus E, L2020 eqs. 11-24)"
+        ));
+    }
+    let lacking: Vec<(&str, &str)> = [
+        (
+            raw.stretch_stiffness.or(raw.stretch_number),
+            ("k_s", "stretch_stiffness or stretch_number"),
+        ),
+        (
+            raw.bending_stiffness.or(raw.bending_number),
+            ("k_b", "bending_stiffness or bending_number"),
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(given, what)| given.is_none().then_some(what))
+    .collect();
+    if lacking.is_empty() {
+        return Ok(None);
+    }
+    let names: Vec<&str> = lacking.iter().map(|(k, _)| *k).collect();
+    let keys: Vec<String> = lacking.iter().map(|(k, w)| format!("{k} ({w})")).collect();
+    Err(format!(
+        "{key} is required and missing: a bead-spring fibre takes from it the constants \
+         of S2023 eq. 9 that its table does not give, here {}; give youngs_modulus, or \
+         give {}",
+        names.join(" and "),
+        keys.join(" and ")
+    ))
 }
 
 fn model_kind(p: &str, name: &str) -> Result<ModelKind, String> {

@@ -49,7 +49,10 @@ pub struct FibreInfo {
     pub bead_radius: f64,
     /// Rest distance between bead centres if given (default 2 bead_radius).
     pub spacing: f64,
-    /// Young's modulus if given (for the derived k0 / (eta gamma)).
+    /// Young's modulus where it sets the fibre's bending (for the derived k0 / (eta gamma)
+    /// and the elastocapillary number): `None` if not given, and for a bead-spring fibre whose
+    /// table sets k_b itself (`bending_stiffness` or `bending_number`), which E then does not
+    /// describe.
     pub youngs_modulus: Option<f64>,
     /// Bead-spring k_b if given (for the derived bending number K of S2023 eq. 18).
     pub bending_stiffness: Option<f64>,
@@ -432,10 +435,13 @@ pub fn read_fibres(table: &toml::Table) -> Result<Vec<FibreInfo>, String> {
             .and_then(number)
             .filter(|s| s.is_finite() && *s > 0.0)
             .unwrap_or(2.0 * bead_radius);
+        let bends_by_k_b = ["bending_stiffness", "bending_number"]
+            .iter()
+            .any(|k| t.contains_key(*k));
         let youngs_modulus = t
             .get("youngs_modulus")
             .and_then(number)
-            .filter(|e| e.is_finite() && *e > 0.0);
+            .filter(|e| e.is_finite() && *e > 0.0 && !bends_by_k_b);
         let bending_stiffness = t.get("bending_stiffness").and_then(number);
         let affinity = match t.get("affinity") {
             None => 0.0,
@@ -519,6 +525,18 @@ viscosity = 0.5
         );
         assert_eq!(c.fibres.len(), 2);
         assert_eq!(c.fibres[0].youngs_modulus, Some(10.0));
+        // A bead-spring fibre that sets k_b itself: E does not describe its bending.
+        for k in ["bending_stiffness = 0.4", "bending_number = 3.3"] {
+            let own = s.replace(
+                "spacing = 3\n",
+                &format!("spacing = 3\nyoungs_modulus = 1\n{k}\n"),
+            );
+            assert_eq!(
+                parse_scene(&own).unwrap().fibres[1].youngs_modulus,
+                None,
+                "{k}"
+            );
+        }
         assert_eq!(c.fibres[0].length(), 15.0);
         assert_eq!(c.fibres[1].length(), 5.0);
         assert_eq!(c.total_beads(), 5);
