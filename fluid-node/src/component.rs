@@ -195,6 +195,15 @@ impl FluidComponent {
             .as_ref()
             .map_or_else(Vec::new, crate::binary_fluid::derived::notes);
         notes.extend(cosim::profile::truncation_note(cfg.xi, cfg.xi_cutoff));
+        notes.extend(cfg.fibres.iter().enumerate().filter_map(|(n, f)| {
+            cosim::profile::small_bead_note(
+                &format!("fibre.{n}"),
+                f.bead_radius,
+                cfg.xi,
+                cfg.xi_cutoff,
+                grid.dims,
+            )
+        }));
         let total_beads = radii.len();
         let start = spm_start_check(grid, &spm, &cfg, radii);
         let configured = Configured {
