@@ -178,6 +178,11 @@ pub fn from_text(
             e.to_string().trim()
         ))
     })?;
+    let confinement_set = overrides.iter().any(|o| {
+        o.split_once('=')
+            .is_some_and(|(k, _)| k.trim() == "fluid.confinement")
+    });
+    let original = confinement_set.then(|| table.clone());
     let mut value = toml::Value::Table(table);
     let mut replaced = Vec::new();
     for o in overrides {
@@ -186,10 +191,15 @@ pub fn from_text(
             replaced.extend(crate::shear_groups::supersede(t, path.trim()));
         }
     }
+    let override_notes = match (&original, &value) {
+        (Some(o), toml::Value::Table(t)) => crate::shear_groups::confinement_override_notes(o, t),
+        _ => Vec::new(),
+    };
     let mut groups = match &mut value {
         toml::Value::Table(t) => crate::shear_groups::resolve(t).map_err(err)?,
         _ => Resolved::default(),
     };
+    groups.notes.extend(override_notes);
     groups.lines.splice(0..0, replaced);
     let toml_text =
         toml::to_string(&value).map_err(|e| err(format!("cannot re-serialise the scene: {e}")))?;

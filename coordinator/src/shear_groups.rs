@@ -278,6 +278,109 @@ fn set_gap(
     Ok(())
 }
 
+/// Re_ps = rho gamma l_c^2 / (4 eta_f) (S2023 eq. 18) of a scene whose groups are resolved;
+/// `None` where a key it needs is missing.
+fn particle_shear_reynolds(scene: &toml::Table) -> Option<f64> {
+    let fluid = scene.get("fluid")?.as_table()?;
+    let eta = number(fluid.get("viscosity")).filter(|e| *e > 0.0)?;
+    let rho = fluid
+        .get("density")
+        .map_or(Some(DEFAULT_DENSITY), |d| number(Some(d)))?;
+    let gamma = cosim::scene_keys::wall_shear(scene, C).ok()?.shear_rate;
+    let lc = contour(scene, C).ok()?;
+    Some(rho * gamma * lc * lc / (4.0 * eta))
+}
+
+/// The y of the centre of the gap, `(ny - 1) / 2`, and of the midpoint of each fibre the
+/// scene places by `start` (index, y), in a scene whose groups are resolved.
+fn midpoints(scene: &toml::Table) -> Option<(f64, Vec<(usize, f64)>)> {
+    let ny = scene.get("fluid")?.get("grid")?.as_array()?.get(1)?;
+    let centre = 0.5 * (number(Some(ny))? - 1.0);
+    let fibres = scene.get("fibre")?.as_array()?;
+    let placed = fibres
+        .iter()
+        .enumerate()
+        .filter_map(|(n, f)| {
+            let f = f.as_table()?;
+            let y0 = number(f.get("start")?.as_array()?.get(1))?;
+            let beads = f.get("beads")?.as_integer()? as f64;
+            let spacing = match f.get("spacing") {
+                Some(s) => number(Some(s))?,
+                None => 2.0 * number(f.get("bead_radius"))?,
+            };
+            let dir: Vec<f64> = match f.get("direction") {
+                Some(d) => d
+                    .as_array()?
+                    .iter()
+                    .filter_map(|x| number(Some(x)))
+                    .collect(),
+                None => vec![1.0, 0.0, 0.0],
+            };
+            let norm = dir.iter().map(|x| x * x).sum::<f64>().sqrt();
+            let dy = dir.get(1).copied()? / norm;
+            Some((n, y0 + 0.5 * (beads - 1.0) * spacing * dy)).filter(|(_, y)| y.is_finite())
+        })
+        .collect();
+    Some((centre, placed))
+}
+
+/// Notes for a scene whose gap an override set through `fluid.confinement`: what the new
+/// gap changes that the override did not name. `original` is the scene before its overrides,
+/// `scene` after them (both before [`resolve`]); a scene that does not resolve gets no note
+/// (resolve's own message follows).
+///
+/// - With `fluid.viscosity` held, the shear rate follows the gap, and so does Re_ps; S2023
+///   vary C at fixed Re_ps (Fig. 10a).
+/// - A fibre placed by `start` at the centre of the scene's gap stays where it was, off the
+///   centre of the new one (`fibre.N.centred = true` follows the gap).
+pub fn confinement_override_notes(original: &toml::Table, scene: &toml::Table) -> Vec<String> {
+    let resolved = |t: &toml::Table| {
+        let mut t = t.clone();
+        resolve(&mut t).ok().map(|_| t)
+    };
+    let (Some(before), Some(after)) = (resolved(original), resolved(scene)) else {
+        return Vec::new();
+    };
+    let mut notes = Vec::new();
+    let given_re = scene
+        .get("fluid")
+        .is_some_and(|f| f.get("particle_shear_reynolds").is_some());
+    if let (Some(was), Some(now), false) = (
+        particle_shear_reynolds(&before),
+        particle_shear_reynolds(&after),
+        given_re,
+    ) {
+        if (now - was).abs() > 1e-9 * was {
+            notes.push(format!(
+                "fluid.confinement: the new gap keeps fluid.viscosity, so the shear rate \
+                 follows the gap and Re_ps = rho gamma l_c^2 / (4 eta_f) (S2023 eq. 18) is \
+                 {} here against {} in the scene; to hold it, give \
+                 fluid.particle_shear_reynolds = {} too (S2023 vary C at fixed Re_ps, \
+                 Fig. 10a)",
+                Sig(now),
+                Sig(was),
+                Sig(was)
+            ));
+        }
+    }
+    if let (Some((old_centre, old)), Some((centre, new))) = (midpoints(&before), midpoints(&after))
+    {
+        for ((n, was), (_, now)) in old.iter().zip(&new) {
+            if (was - old_centre).abs() < 1e-6 && (now - centre).abs() > 1e-6 {
+                notes.push(format!(
+                    "fibre.{n}.start: the scene placed the fibre's midpoint at the centre of \
+                     its gap, y = {}; the new gap's centre is y = {}, and the fibre starts \
+                     where it was; set fibre.{n}.centred = true (in place of start) to centre \
+                     it in any gap",
+                    Num(*was),
+                    Num(centre)
+                ));
+            }
+        }
+    }
+    notes
+}
+
 /// Without `fluid.confinement` the scene's own fluid.grid = [nx, ny, ..] must leave a gap
 /// between the walls' `margin` rows.
 fn check_gap(grid: &[toml::Value], margin: f64) -> Result<(), String> {
@@ -502,5 +605,42 @@ bead_radius = 4.0
         let mut t =
             table(&FIG7.replace("confinement = 0.5\n", &format!("confinement = {quoted}\n")));
         resolve(&mut t).unwrap_or_else(|e| panic!("C = {quoted}: {e}"));
+    }
+
+    /// `--set fluid.confinement` on a scene given by its viscosity and a fibre's `start` at the
+    /// centre of its gap (configs/fpd/flexible_shear.toml: C = 0.5, Re_ps = 1.5, y = 79.5):
+    /// the notes name the Re_ps the new gap gives and the centre the fibre misses; with Re_ps
+    /// and `centred` set alongside, as docs/validation/fpd_shape_diagram.study.toml does,
+    /// there is nothing to note.
+    #[test]
+    fn a_confinement_override_says_what_the_new_gap_changes_besides() {
+        let text = include_str!("../../configs/fpd/flexible_shear.toml");
+        let notes = |sets: &[&str]| {
+            let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+            crate::scene::from_text(text, "flexible_shear.toml", &sets)
+                .unwrap()
+                .2
+                .notes
+        };
+        let n = notes(&["fluid.confinement=0.8"]);
+        // H = 80 / 0.8 = 100: gamma = 0.1 / 100, Re_ps = 1.5 x 160 / 100 = 2.4.
+        assert_eq!(n.len(), 2, "{n:?}");
+        assert!(
+            n[0].contains("is 2.4 here against 1.5 in the scene"),
+            "{}",
+            n[0]
+        );
+        assert!(
+            n[1].contains("y = 79.5; the new gap's centre is y = 49.5"),
+            "{}",
+            n[1]
+        );
+        let held = notes(&[
+            "fluid.confinement=0.8",
+            "fluid.particle_shear_reynolds=1.5",
+            "fibre.0.centred=true",
+        ]);
+        assert!(held.is_empty(), "{held:?}");
+        assert!(notes(&["fluid.viscosity=0.5"]).is_empty());
     }
 }
