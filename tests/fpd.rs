@@ -609,6 +609,11 @@ fn held_cylinder_drag_against_dennis_and_chang() {
     for st in &states {
         assert_eq!(bead_xy(st)[0], (48.0, 63.5), "the held bead moved");
     }
+    let change = s["metrics"]["drag_coefficient"]["extra"]["change_over_last_fifth"]
+        .as_f64()
+        .unwrap();
+    println!("Re 10: change over the last fifth {change:.2e}");
+    assert!(change < 0.01, "{change}");
     let s20 = small("fluid.viscosity=0.01", "fpd-cylinder-re20");
     let (cd20, reference20) = metric(&s20, "drag_coefficient");
     println!("Re 20: C_D = {cd20:.4} (Dennis & Chang {reference20})");

@@ -21,5 +21,6 @@ pub mod runner;
 pub mod scene;
 pub mod schedule;
 pub mod shear_groups;
+pub mod steady_watch;
 pub mod study;
 pub mod trajectory;

@@ -107,6 +107,8 @@ pub struct Context<'a> {
     /// Impulses of the last step (fluid scenes).
     pub impulses: &'a [cosim::BeadImpulse],
     pub trajectory: &'a crate::trajectory::Trajectory,
+    /// Time at the last step (scene time units).
+    pub time: f64,
 }
 
 /// The value named `key` in a list of named values (diagnostics, derived quantities).
@@ -664,6 +666,7 @@ fn drag_coefficient(ctx: &Context) -> Result<Metric, String> {
     if let Some(b) = lookup(ctx.derived, "fluid.stream.blockage") {
         m.extra.insert("blockage".into(), b);
     }
+    steadiness(&mut m, "drag_coefficient", ctx);
     Ok(m)
 }
 
@@ -709,7 +712,29 @@ fn drag_ratio(ctx: &Context) -> Result<Metric, String> {
     m.extra.insert("solid_fraction".into(), c);
     m.extra.insert("drag_force".into(), force);
     m.extra.insert("mean_velocity".into(), u);
+    steadiness(&mut m, "drag_ratio", ctx);
     Ok(m)
+}
+
+/// A steady metric's change over the run's last fifth ([`crate::steady_watch`]), as an extra
+/// value, and in its note where the flow is not steady.
+fn steadiness(m: &mut Metric, name: &str, ctx: &Context) {
+    let end = crate::steady_watch::quantity(name, ctx.diagnostics);
+    if let Some(c) = ctx.trajectory.steady.change(name, ctx.time, end) {
+        m.extra
+            .insert(crate::steady_watch::CHANGE_EXTRA.into(), c.relative);
+        if c.relative > crate::steady_watch::STEADY_CHANGE {
+            let not_steady = format!(
+                "not steady: {:.2} % change over the run's last fifth",
+                100.0 * c.relative
+            );
+            m.note = if m.note.is_empty() {
+                not_steady
+            } else {
+                format!("{}; {not_steady}", m.note)
+            };
+        }
+    }
 }
 
 /// The fibre-alone metrics of fibre 0 (cantilever and torsion).

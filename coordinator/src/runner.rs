@@ -498,6 +498,8 @@ struct RunState {
     metrics: BTreeMap<String, crate::metrics::Metric>,
     /// Metrics asked for that could not be computed, with the reason.
     metric_errors: BTreeMap<String, String>,
+    /// Steady metrics read while the flow still changed ([`crate::steady_watch`]).
+    steady_warnings: Vec<String>,
     /// Files written next to the log and the summary (`orbit.csv`, `orbit.png`).
     files: Vec<String>,
     /// Files that could not be written, with the reason; the run still completes.
@@ -556,6 +558,7 @@ impl RunState {
         let largest_fibre_overlap =
             (scene.scene.fibre.len() > 1).then(|| largest(&self.watches.fibre_watch));
         let mut warnings = overlap_warnings(scene, &self.watches);
+        warnings.extend(self.steady_warnings.iter().cloned());
         // A scene that runs to rest but ran out of steps first: its static metrics are of
         // a fibre still moving.
         if let (Some(tol), "completed") = (scene.scene.time.rest_tolerance, status) {
@@ -661,6 +664,11 @@ fn drive(
         st,
     )?;
     let shape_every = (steps / crate::trajectory::SHAPE_SNAPSHOTS).max(1);
+    // A checkpoint from before the steady history was kept starts it at the resume.
+    if trajectory.steady.samples.is_empty() {
+        trajectory.steady =
+            crate::steady_watch::SteadyHistory::for_metrics(&scene.scene.analysis.metrics);
+    }
 
     let interval = scene.output_interval();
     let load_scale = largest_load(scene);
@@ -759,6 +767,7 @@ fn drive(
             )));
         }
         st.watches.observe(step + 1, &report);
+        trajectory.steady.observe(step + 1, steps, st.time, &report);
         st.last_diagnostics = report;
         let at_rest = scene
             .scene
@@ -1021,9 +1030,18 @@ fn conclude(
         diagnostics: &st.last_diagnostics,
         impulses: &impulses,
         trajectory,
+        time: st.time,
     };
     (st.metrics, st.metric_errors) =
         crate::metrics::compute_each(&scene.scene.analysis.metrics, &ctx, &mut st.dimensionless);
+    st.steady_warnings = crate::steady_watch::STEADY_METRICS
+        .iter()
+        .filter(|m| st.metrics.contains_key(**m))
+        .filter_map(|m| {
+            let end = crate::steady_watch::quantity(m, &st.last_diagnostics);
+            trajectory.steady.change(m, st.time, end)?.warning(m)
+        })
+        .collect();
     // The orbit the metrics rest on, as files: needs the trajectory and a wall shear.
     let gamma = crate::metrics::lookup(&st.configured.derived, "fluid.shear_rate").map(f64::abs);
     if let (true, Some(gamma)) = (track, gamma) {

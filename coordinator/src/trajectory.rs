@@ -1,4 +1,5 @@
-//! The orientation history of fibre 0, kept step by step for the orbit metrics.
+//! The history a run keeps for its metrics: fibre 0's orientation step by step (the orbit
+//! metrics) and the steady metrics' quantities ([`crate::steady_watch`]).
 
 /// Angle of fibre 0's end-to-end vector in the x-y plane (unwrapped, radians) and its length.
 #[derive(Debug, Default, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -16,6 +17,10 @@ pub struct Trajectory {
     /// orbit plot (`orbit_report`). Absent from checkpoints written before they were kept.
     #[serde(default)]
     pub shapes: Vec<(f64, Vec<[f64; 2]>)>,
+    /// What the steady metrics read, sampled over the run. Absent from checkpoints written
+    /// before it was kept (the change is then measured from the resume on).
+    #[serde(default)]
+    pub steady: crate::steady_watch::SteadyHistory,
 }
 
 /// Shape snapshots the orbit plot shows over a run.
