@@ -92,7 +92,7 @@ impl SteadyHistory {
     /// `steps / SAMPLES` steps (the last step's value the metric reads itself).
     pub fn observe(&mut self, step: u64, steps: u64, time: f64, diagnostics: &[(String, f64)]) {
         let stride = (steps / SAMPLES).max(1);
-        if step % stride != 0 {
+        if !step.is_multiple_of(stride) {
             return;
         }
         for (metric, list) in &mut self.samples {
