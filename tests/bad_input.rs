@@ -435,3 +435,40 @@ fn a_refused_scene_leaves_the_earlier_run_in_its_folder() {
     assert!(!o.status.success());
     assert!(!out.exists(), "a refused scene left {}", out.display());
 }
+
+/// Numbers on the command line are refused in words, negative ones included (clap would
+/// otherwise take `-5` for an option, or say "invalid digit found in string"), and
+/// `--lock-step`, a way of running processes, is refused beside `--in-process`. Nothing
+/// runs: every refusal comes before the scene is read.
+#[test]
+fn command_line_numbers_and_conflicts() {
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["run", "--checkpoint-interval=-1"],
+            "expected a whole number of steps, 0 (no checkpoints) or more",
+        ),
+        (
+            &["run", "--checkpoint-interval", "2.5"],
+            "expected a whole number of steps",
+        ),
+        (
+            &["run", "--node-timeout", "-5"],
+            "--node-timeout: expected a positive number of seconds, got -5",
+        ),
+        (
+            &["run", "--in-process", "--lock-step"],
+            "'--in-process' cannot be used with '--lock-step'",
+        ),
+        (
+            &["study", "no-such.study.toml", "--jobs", "-2"],
+            "expected a whole number of variants to run at once, from 1",
+        ),
+        (
+            &["study", "no-such.study.toml", "--jobs", "0"],
+            "expected a whole number of variants to run at once, from 1",
+        ),
+    ];
+    for (args, needle) in cases {
+        expect_error(args, &[needle]);
+    }
+}

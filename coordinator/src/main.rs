@@ -36,11 +36,16 @@ enum Cmd {
         #[arg(long, short)]
         quiet: bool,
         /// Seconds to wait for one reply of a node before ending the run as unresponsive.
-        #[arg(long, value_name = "SECONDS", default_value_t = 600.0)]
+        #[arg(
+            long,
+            value_name = "SECONDS",
+            default_value_t = 600.0,
+            allow_negative_numbers = true
+        )]
         node_timeout: f64,
         /// Save the run's full state to OUT/checkpoint every N steps, at the last step and
         /// on Ctrl-C or SIGTERM (0: no checkpoints).
-        #[arg(long, value_name = "N", default_value_t = 0)]
+        #[arg(long, value_name = "N", default_value_t = 0, allow_negative_numbers = true, value_parser = steps_or_none)]
         checkpoint_interval: u64,
         /// Continue the run from a checkpoint folder (OUT/checkpoint of an earlier run),
         /// with the same scene; time.steps, [output] and [analysis] may differ.
@@ -49,7 +54,7 @@ enum Cmd {
         /// As processes: hand every phase out and back through the coordinator, one at a
         /// time, instead of sending each node its phases of a step at once (same results;
         /// slower; for comparison and debugging).
-        #[arg(long)]
+        #[arg(long, conflicts_with = "in_process")]
         lock_step: bool,
     },
     /// Check a scene, print its effects, schedule and time-step limits; run nothing.
@@ -82,7 +87,7 @@ enum Cmd {
         replot: bool,
         /// Run this many variants at once, each as its own `coordinator run` (same results;
         /// the wall times then include the runs' contention, so keep 1 for cost plots).
-        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+        #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = job_count)]
         jobs: u16,
         /// Check every variant as `coordinator check` does and run nothing (--out and --jobs
         /// may stay on the command line: nothing is written).
@@ -103,6 +108,24 @@ enum Cmd {
         #[arg(long, value_name = "TOPIC", conflicts_with = "out")]
         topic: Option<String>,
     },
+}
+
+/// `--checkpoint-interval`: a whole number of steps, 0 for none.
+fn steps_or_none(text: &str) -> Result<u64, String> {
+    text.trim()
+        .parse()
+        .map_err(|_| "expected a whole number of steps, 0 (no checkpoints) or more".to_string())
+}
+
+/// `--jobs`: how many variants at once, at least 1.
+fn job_count(text: &str) -> Result<u16, String> {
+    match text.trim().parse::<u16>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!(
+            "expected a whole number of variants to run at once, from 1 to {}",
+            u16::MAX
+        )),
+    }
 }
 
 fn main() -> ExitCode {
