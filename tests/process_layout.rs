@@ -97,6 +97,33 @@ fn a_study_run_in_parallel_gives_the_values_of_one_run_after_another() {
     };
     let (one_by_one, states_1) = run("1", "one");
     let (parallel, states_3) = run("3", "three");
+    // --replot reads the runs under the folder the study ran from, and says so elsewhere.
+    let replot = |cwd: &std::path::Path| {
+        std::process::Command::new(bin_dir().join("coordinator"))
+            .args(["study", study.to_str().unwrap(), "--replot", "--out"])
+            .arg(dir.join("replot"))
+            .current_dir(cwd)
+            .output()
+            .unwrap()
+    };
+    let here = replot(&root());
+    let stdout = String::from_utf8_lossy(&here.stdout);
+    assert!(
+        here.status.success(),
+        "{}",
+        String::from_utf8_lossy(&here.stderr)
+    );
+    assert!(
+        stdout.contains(&format!("runs in runs/study/{name}/")),
+        "{stdout}"
+    );
+    let elsewhere = replot(&dir);
+    let err = String::from_utf8_lossy(&elsewhere.stderr);
+    assert!(!elsewhere.status.success());
+    assert!(
+        err.contains("a study keeps its runs in") && err.contains("run --replot from that folder"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&runs);
     assert_eq!(one_by_one.len(), 4, "{one_by_one:?}");
     assert_eq!(one_by_one, parallel);

@@ -36,7 +36,8 @@
 //! table and the plot show each variant's distance from the estimated converged value.
 //!
 //! `coordinator study FILE --replot` rebuilds the table and plots from the runs a previous
-//! `study` left in `runs/study/<name>/<variant>/summary.json`, without running anything;
+//! `study` left in `runs/study/<name>/<variant>/summary.json` (under the current folder, not
+//! beside the study file), without running anything;
 //! `--jobs N` runs N variants at once as separate `coordinator run` processes ([`Runs`]).
 use crate::runner::{self, RunOptions};
 use serde::Deserialize;
@@ -599,9 +600,27 @@ fn variant_summary(
             let opts = RunOptions::quiet(run_dir, !study.processes);
             runner::run(&scene, &opts).map(|r| r.summary)
         }
-        Runs::Reuse => read_summary(&run_dir.join("summary.json")).map_err(|e| runner::RunError {
-            message: format!("--replot: {e}"),
-        }),
+        Runs::Reuse => {
+            let path = run_dir.join("summary.json");
+            if !path.is_file() {
+                // The runs lie under the folder the study ran from, not beside its file.
+                let here = std::env::current_dir().map_or("the current folder".to_string(), |d| {
+                    d.display().to_string()
+                });
+                return Err(runner::RunError {
+                    message: format!(
+                        "--replot: there is no {} under {here}: a study keeps its runs in \
+                         runs/study/{}/ under the folder it ran from; run --replot from that \
+                         folder, or run the study once without --replot",
+                        path.display(),
+                        study.name
+                    ),
+                });
+            }
+            read_summary(&path).map_err(|e| runner::RunError {
+                message: format!("--replot: {e}"),
+            })
+        }
         Runs::Parallel { .. } => {
             // A run that failed after step 0 writes its summary (status `failed`, the
             // error); one refused before writes none, and its log's last line says why.
@@ -744,7 +763,11 @@ fn write_outputs(study: &Study, rows: &[Row], note: &str, out: &Path) -> Result<
         written.push(png);
     }
     let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
-    Ok(format!("{md}\nwrote {}", names.join(", ")))
+    Ok(format!(
+        "{md}\nwrote {}\nruns in runs/study/{}/ (--replot reads them from this folder)",
+        names.join(", "),
+        study.name
+    ))
 }
 
 fn read_summary(path: &Path) -> Result<serde_json::Value, String> {
