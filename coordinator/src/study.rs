@@ -855,7 +855,10 @@ pub fn render_markdown(title: &str, metric: &str, rows: &[Row], curve: Option<&s
             "| {} |{x} {} | {} | {} | {:.3} | {} | {} |",
             r.label,
             match &r.class {
-                Some(c) => format!("{c} ({})", r.value),
+                // The orbit's value is only the class's code (metrics.rs); a wrap's is the
+                // wrapped fraction, worth reading next to its class.
+                Some(c) if metric == "orbit" => c.clone(),
+                Some(c) => format!("{c} ({:.6})", r.value),
                 None => format!("{:.6}", r.value),
             },
             fmt_opt(r.reference),
@@ -938,6 +941,20 @@ mod tests {
         assert!(plain.lines().next().unwrap().ends_with(",x,y"));
         assert_eq!(plain.lines().nth(1).unwrap().split(',').count(), 10);
         assert!(!render_markdown("t", "m", &[r], None).contains("fluid.re"));
+    }
+
+    /// A class is shown alone for `orbit`, whose value is only the class's code, and with
+    /// its value for other classifying metrics (`wrap`: the wrapped fraction).
+    #[test]
+    fn an_orbit_cell_shows_its_class_and_a_wrap_cell_its_fraction_too() {
+        let mut r = row(8.0, 1.0);
+        r.class = Some("jeffery".into());
+        let md = render_markdown("t", "orbit", std::slice::from_ref(&r), None);
+        assert!(md.contains("| n=8 | jeffery | "), "{md}");
+        r.class = Some("full".into());
+        r.value = 0.7565195983599549;
+        let md = render_markdown("t", "wrap", &[r], None);
+        assert!(md.contains("| n=8 | full (0.756520) | "), "{md}");
     }
 
     /// v(n) = 2 + 3 n^-p sampled at three resolutions, in any order: the two finest give
