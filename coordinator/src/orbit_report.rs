@@ -4,10 +4,10 @@
 //! - `orbit.csv`: one row per sample (every step, thinned to at most [`MAX_ROWS`] rows): time,
 //!   `gamma t`, the unwrapped angle and the direction (degrees), the angular velocity over
 //!   the shear rate, and the end-to-end distance over the contour length;
-//! - `orbit.png`: S2023 Fig. 5a (the angular velocity against the direction, with eq. 19 for
-//!   the fitted and the geometric aspect ratio) above the direction and the end-to-end
-//!   distance against `gamma t`, and snapshots of the fibre's shape along `gamma t` (S2023
-//!   Fig. 7a).
+//! - `orbit.png`: S2023 Fig. 5a (the angular velocity against the direction, without the
+//!   first and last samples, with eq. 19 for the fitted and the geometric aspect ratio) above
+//!   the direction and the end-to-end distance against `gamma t`, and snapshots of the
+//!   fibre's shape along `gamma t` (S2023 Fig. 7a).
 //!
 //! Angles follow [`crate::orbit`]: from +x, counter-clockwise positive, so the shear turns
 //! the fibre towards negative angles and `omega / gamma` is negative.
@@ -68,6 +68,18 @@ impl OrbitRows {
 
     pub fn len(&self) -> usize {
         self.time.len()
+    }
+
+    /// The points of S2023 Fig. 5a, `(direction, omega / gamma)`, without the first and the
+    /// last sample: their angular velocity is a one-sided difference, and the first is the
+    /// fibre's start from rest (0 where eq. 19 may ask for -1), not a point of the orbit.
+    /// The Jeffery fit leaves out the same two (`crate::orbit`).
+    pub fn orbit_points(&self) -> Vec<(f64, f64)> {
+        let n = self.len();
+        (1..n.saturating_sub(1))
+            .map(|i| (self.direction_deg[i], self.omega_over_gamma[i]))
+            .filter(|(_, w)| w.is_finite())
+            .collect()
     }
 
     pub fn is_empty(&self) -> bool {
@@ -197,6 +209,10 @@ mod tests {
         let rows = OrbitRows::new(&s, 0.5, 4);
         assert_eq!(rows.time, vec![0.0, 4.0, 8.0, 9.0]);
         assert!((rows.omega_over_gamma[1] + 0.02).abs() < 1e-12);
+        // Fig. 5a's points leave out the first and the last sample.
+        let points = rows.orbit_points();
+        assert_eq!(points.len(), 2);
+        assert_eq!(points[0], (rows.direction_deg[1], rows.omega_over_gamma[1]));
         let csv = rows.csv();
         assert_eq!(csv.lines().count(), 5);
         assert!(csv.starts_with("time,gamma_t,theta_deg"));

@@ -449,7 +449,9 @@ fn omega_panel(
     reference: Option<(f64, &str)>,
 ) -> Result<(), String> {
     let e = drawing_error(path);
-    let (w0, w1) = finite_range(&rows.omega_over_gamma);
+    let points = rows.orbit_points();
+    let omegas: Vec<f64> = points.iter().map(|p| p.1).collect();
+    let (w0, w1) = finite_range(&omegas);
     let (w0, w1) = padded((w0.min(-1.0), w1.max(0.0)), 0.1);
     // Room above the curves for the legend.
     let w1 = w1 + 0.3 * (w1 - w0);
@@ -466,11 +468,9 @@ fn omega_panel(
         .map_err(e)?;
     chart
         .draw_series(
-            rows.direction_deg
+            points
                 .iter()
-                .zip(&rows.omega_over_gamma)
-                .filter(|(_, w)| w.is_finite())
-                .map(|(&t, &w)| Circle::new((t, w), 2, BLUE.filled())),
+                .map(|&(t, w)| Circle::new((t, w), 2, BLUE.filled())),
         )
         .map_err(e)?
         .label("measured")
