@@ -52,3 +52,46 @@ fn every_study_in_docs_validation_checks() {
         assert!(n > 0, "{}: no variants", p.display());
     }
 }
+
+/// docs/summary.md documents every diagnostic a node can report (each node's lists of names,
+/// in their fixed order), so that a new diagnostic cannot land undocumented.
+#[test]
+fn every_diagnostic_is_documented() {
+    let doc = std::fs::read_to_string(root().join("docs").join("summary.md")).unwrap();
+    let table: Vec<&str> = doc
+        .split("## Diagnostics")
+        .nth(1)
+        .expect("docs/summary.md has a Diagnostics section")
+        .lines()
+        .filter(|l| l.starts_with("| `"))
+        .collect();
+    // A name is documented where a row names it, whole (`name`) or as an axis of `x_, _y`.
+    let documented = |name: &str| {
+        let axis = name
+            .rsplit_once('_')
+            .filter(|(_, a)| ["x", "y", "z"].contains(a));
+        table.iter().any(|row| {
+            let cell = row.split(" | ").next().unwrap_or("");
+            cell.contains(&format!("`{name}`"))
+                || axis.is_some_and(|(stem, a)| {
+                    cell.contains(&format!("`{stem}_x`"))
+                        && (a == "x" || cell.contains(&format!("`_{a}`")))
+                })
+        })
+    };
+    let names = fibre_node::component::DIAGNOSTICS
+        .iter()
+        .chain(&fluid_node::component::DIAGNOSTICS)
+        .chain(&fluid_node::component::EXCHANGE_DIAGNOSTICS)
+        .chain(&[fluid_node::component::COUETTE_DIAGNOSTIC])
+        .chain(&fluid_node::fpd_lbm::FPD_DIAGNOSTICS)
+        .chain(&fluid_node::binary_fluid::PHASE_FIELD_DIAGNOSTICS)
+        .chain(&fluid_node::binary_fluid::INTERFACE_DIAGNOSTICS)
+        .chain(&fluid_node::binary_fluid::CONTACT_ANGLE_DIAGNOSTICS)
+        .chain(&fluid_node::binary_fluid::droplet::DROPLET_DIAGNOSTICS);
+    let missing: Vec<&&str> = names.filter(|n| !documented(n)).collect();
+    assert!(
+        missing.is_empty(),
+        "not in docs/summary.md's Diagnostics: {missing:?}"
+    );
+}

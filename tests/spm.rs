@@ -140,6 +140,19 @@ fn a_drag_read_before_the_flow_is_steady_is_flagged() {
         w.contains("the flow is not yet steady; raise time.steps"),
         "{w}"
     );
+    // docs/summary.md documents every key of the summary and of a metric.
+    let doc = std::fs::read_to_string(root().join("docs").join("summary.md")).unwrap();
+    let keys = s
+        .as_object()
+        .unwrap()
+        .keys()
+        .chain(m.as_object().unwrap().keys());
+    for k in keys {
+        assert!(
+            doc.contains(&format!("`{k}`")),
+            "docs/summary.md lacks `{k}`"
+        );
+    }
 }
 
 /// Hard case (issue: stability): a stiff fibre, k0 / (L0 eta gamma) = 1e6, in shear with
