@@ -232,7 +232,7 @@ fn an_incomplete_binary_fluid_is_refused_by_the_fluid_node() {
         &format!(
             "{GOOD}\n[fluid]\nmethod = \"spm\"\ngrid = [16, 16]\nviscosity = 1.0\nxi = 0.1\n[fluid.binary]\n"
         ),
-        &["fluid.binary.initial", "required key is missing"],
+        &["fluid.binary.initial", "is required and missing"],
     );
 }
 

@@ -25,7 +25,7 @@ pub fn serde_message(prefix: &str, path: &serde_path_to_error::Path, msg: &str) 
         return format!("{table}: {unknown}");
     }
     if msg.starts_with("missing field ") {
-        return format!("{full}.{quoted}: required key is missing");
+        return format!("{full}.{quoted} is required and missing");
     }
     format!("{full}: {}", plain_words(msg))
 }
@@ -358,9 +358,9 @@ pub fn dimensions(table: &toml::Table) -> Result<u8, String> {
 /// The `time.dt` every node reads: required, positive.
 pub fn time_step(table: &toml::Table) -> Result<f64, String> {
     match table.get("time") {
-        None => Err("time.dt: required key is missing (no [time] table)".into()),
+        None => Err("time.dt is required and missing (no [time] table)".into()),
         Some(toml::Value::Table(t)) => match t.get("dt") {
-            None => Err("time.dt: required key is missing".into()),
+            None => Err("time.dt is required and missing".into()),
             Some(toml::Value::Float(x)) => positive("time.dt", *x),
             Some(toml::Value::Integer(i)) => positive("time.dt", *i as f64),
             Some(v) => Err(format!(

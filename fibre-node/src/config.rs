@@ -821,7 +821,7 @@ youngs_modulus = 1.0
             ("loads = [{ bead = 1, forse = [0, 1, 0] }]", "fibre.0.loads.0: unknown key `forse`"),
             ("loads = [{ bead = 1, force = [0, 1, 1] }]", "fibre.0.loads.0.force: a 2D scene"),
             ("loads = [{ bead = 1, torque = [1, 0, 0] }]", "fibre.0.loads.0.torque: a 2D scene"),
-            ("loads = [{ force = [0, 1, 0] }]", "fibre.0.loads.0.bead: required key is missing"),
+            ("loads = [{ force = [0, 1, 0] }]", "fibre.0.loads.0.bead is required and missing"),
             ("stretch_stiffness = 3", "fibre.0.stretch_stiffness: only the bead-spring model"),
             ("clamp = 3", "fibre.0.clamp: expected an array, got 3"),
             ("beam_forces = \"exact\"", "fibre.0.beam_forces: expected \"paper\" or \"energy-consistent\", got \"exact\""),
@@ -847,7 +847,7 @@ youngs_modulus = 1.0
             .starts_with("fibre.0.beads: expected a whole number, got 2.5"));
         assert_eq!(
             replace("beads = 10\n", ""),
-            "fibre.0.beads: required key is missing"
+            "fibre.0.beads is required and missing"
         );
         assert_eq!(
             replace("\"cohesive-beam\"", "\"rope\""),
@@ -861,10 +861,7 @@ youngs_modulus = 1.0
             replace("dt = 0.1", "dt = 0"),
             "time.dt: expected a positive number, got 0"
         );
-        assert_eq!(
-            replace("dt = 0.1\n", ""),
-            "time.dt: required key is missing"
-        );
+        assert_eq!(replace("dt = 0.1\n", ""), "time.dt is required and missing");
         assert!(replace("[[fibre]]", "[fibre]").starts_with("fibre: expected an array of tables"));
         assert!(err("dt = [").starts_with("the scene is not valid TOML"));
         // Bead-spring refuses a torque and reads its stiffness overrides.

@@ -403,7 +403,7 @@ pub fn read_fibres(table: &toml::Table) -> Result<Vec<FibreInfo>, String> {
             return Err(format!("{p}: expected a table, got {}", describe_toml(v)));
         };
         let beads = match t.get("beads") {
-            None => return Err(format!("{p}.beads: required key is missing")),
+            None => return Err(format!("{p}.beads is required and missing")),
             Some(toml::Value::Integer(b)) if (1..=MAX_BEADS).contains(b) => *b,
             Some(v) => {
                 return Err(format!(
@@ -419,7 +419,7 @@ pub fn read_fibres(table: &toml::Table) -> Result<Vec<FibreInfo>, String> {
             ));
         }
         let bead_radius = match t.get("bead_radius") {
-            None => return Err(format!("{p}.bead_radius: required key is missing")),
+            None => return Err(format!("{p}.bead_radius is required and missing")),
             Some(v) => match number(v) {
                 Some(x) => positive(&format!("{p}.bead_radius"), x)?,
                 None => {
@@ -554,7 +554,7 @@ viscosity = 0.5
             ("body_force = 3", "fluid.body_force: expected an array, got 3"),
             ("initial_velocity = \"couette\"", "fluid.initial_velocity: \"couette\" needs a [walls] table"),
             ("initial_velocity = \"poiseuille\"", "fluid.initial_velocity: expected \"rest\" or \"couette\", got \"poiseuille\""),
-            ("[fluid.binary]\nmobility = 1", "fluid.binary.initial: required key is missing"),
+            ("[fluid.binary]\nmobility = 1", "fluid.binary.initial is required and missing"),
             ("[fluid.binary]\ninitial = \"flat\"\nposition = 12\ncolour = 1", "fluid.binary.colour: unknown key (set to 1); expected one of `xi`, `e0`, `sigma`, `mobility`, `peclet`, `velocity_scale`, `stabilisation`, `wall_affinity`, `initial`, `normal`, `position`, `width`, `centre`, `radius`, `inside`"),
             ("[fluid.binary]\ninitial = \"flat\"\nposition = 12\nradius = 3", "fluid.binary.radius: does not apply to initial = \"flat\""),
             ("[fluid.binary]\ninitial = \"flat\"\nposition = 12\nnormal = [1, 1]", "fluid.binary.normal: expected an axis 0 or 1, or a vector along x or y"),
@@ -566,10 +566,10 @@ viscosity = 0.5
             ("[[fibre]]\nbeads = 2\nbead_radius = 1\naffinity = 2", "fibre.0.affinity: expected psi0 in [-1, 1] (L2020 eq. 31), got 2"),
             ("[walls]\nvelocity = [0, 1]\nspeed = 2", "walls.speed: unknown key (set to 2); expected one of `velocity`, `thickness`"),
             ("[walls]\nvelocity = [0, 1, 2]", "walls.velocity: expected [bottom, top] (two finite numbers), got [0, 1, 2]"),
-            ("[walls]\nthickness = 2", "walls.velocity: required key is missing"),
+            ("[walls]\nthickness = 2", "walls.velocity is required and missing"),
             ("[walls]\nvelocity = [0, 1]\nthickness = 9", "walls.thickness: 9 leaves a gap of 6 grid units between the walls' inner faces in a grid of ny = 24, expected at least 8"),
             ("[walls]\nvelocity = [0, inf]", "walls.velocity: expected [bottom, top] (two finite numbers), got [0, inf]"),
-            ("[[fibre]]\nbead_radius = 1", "fibre.0.beads: required key is missing"),
+            ("[[fibre]]\nbead_radius = 1", "fibre.0.beads is required and missing"),
             ("[[fibre]]\nbeads = 0\nbead_radius = 1", "fibre.0.beads: expected an integer in 1..=1000000, got 0"),
             ("[[fibre]]\nbeads = 2\nbead_radius = \"big\"", "fibre.0.bead_radius: expected a positive number, got the string \"big\""),
             ("[[fibre]]\nbeads = 2\nbead_radius = 9", "fibre.0.bead_radius: 9 plus fluid.xi_cutoff 3 needs a grid of at least 26 nodes along every axis, fluid.grid has 24"),
@@ -590,7 +590,7 @@ viscosity = 0.5
         );
         assert_eq!(
             replace("method = \"spm\"\n", ""),
-            "fluid.method: required key is missing"
+            "fluid.method is required and missing"
         );
         assert_eq!(
             replace("[32, 24]", "[32, 24, 8]"),

@@ -101,7 +101,7 @@ fn bad_scenes_are_refused_with_the_key_and_never_panic() {
     ];
     let want = [
         "fluid.viscosity: expected a positive number, got -1",
-        "fluid.binary.initial: required key is missing",
+        "fluid.binary.initial is required and missing",
         "fluid.grid: a 2D scene expects [nx, ny], got [48, 40, 3]",
         "walls.colour: unknown key (set to 3); expected one of `velocity`, `thickness`",
         "time step too large for the fluid (advective CFL limit): time.dt = 30 exceeds 25 (",

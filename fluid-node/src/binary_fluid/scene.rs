@@ -260,7 +260,7 @@ impl Table<'_> {
         let kind = match t.get("initial") {
             None => {
                 return Err(
-                    "fluid.binary.initial: required key is missing (expected \"flat\", \
+                    "fluid.binary.initial is required and missing (expected \"flat\", \
                             \"droplet\" or \"half-droplet\")"
                         .into(),
                 )
