@@ -33,7 +33,7 @@ pub struct Scene {
     #[serde(default)]
     pub description: Option<String>,
     /// 2 (motion in the x-y plane, no twist) or 3.
-    #[serde(default = "default_dimensions")]
+    #[serde(default = "default_dimensions", deserialize_with = "two_or_three")]
     pub dimensions: u8,
     pub time: TimeConfig,
     /// Fibres; read and checked by the fibre node.
@@ -53,6 +53,17 @@ pub struct Scene {
 
 fn default_dimensions() -> u8 {
     3
+}
+
+/// `dimensions`, read as any whole number so that 300 or -1 is told "expected 2 or 3" (read as
+/// a byte, 300 would be told "expected a whole number (0 to 255)").
+fn two_or_three<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u8, D::Error> {
+    match i64::deserialize(d)? {
+        n @ (2 | 3) => Ok(n as u8),
+        n => Err(serde::de::Error::custom(format!(
+            "expected 2 or 3, got {n}"
+        ))),
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -210,7 +221,7 @@ pub fn from_text(
 fn parse_checked(value: toml::Value, origin: &str) -> Result<Scene, SceneError> {
     let scene: Scene = serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
-        let msg = key_message(
+        err(key_message(
             origin,
             &path,
             &e.into_inner().to_string(),
@@ -218,14 +229,7 @@ fn parse_checked(value: toml::Value, origin: &str) -> Result<Scene, SceneError> 
                 &["fibre"],
                 &["time", "output", "analysis", "fluid", "walls"],
             ),
-        );
-        // Read as a byte: 300 is a whole number too, so say what is meant.
-        match msg.split(", got ").nth(1) {
-            Some(got) if path == "dimensions" => err(format!(
-                "{origin}: key `dimensions`: expected 2 or 3, got {got}"
-            )),
-            _ => err(msg),
-        }
+        ))
     })?;
     check_ranges(&scene)?;
     Ok(scene)
@@ -284,12 +288,6 @@ pub fn key_message(
 }
 
 fn check_ranges(s: &Scene) -> Result<(), SceneError> {
-    if s.dimensions != 2 && s.dimensions != 3 {
-        return Err(err(format!(
-            "key `dimensions`: expected 2 or 3, got {}",
-            s.dimensions
-        )));
-    }
     if !(s.time.dt.is_finite() && s.time.dt > 0.0) {
         return Err(err(format!(
             "key `time.dt`: expected a positive number, got {}",
@@ -492,7 +490,7 @@ mod tests {
         let e = from_text(&format!("dimensions = 4\n{base}"), "s", &[])
             .unwrap_err()
             .0;
-        assert!(e.contains("dimensions"), "{e}");
+        assert_eq!(e, "s: key `dimensions`: expected 2 or 3, got 4");
     }
 
     /// A metric the scene's tables cannot give is refused with what it needs.
@@ -548,6 +546,14 @@ mod tests {
             (
                 format!("dimensions = 300\n{base}"),
                 "s: key `dimensions`: expected 2 or 3, got 300",
+            ),
+            (
+                format!("dimensions = -1\n{base}"),
+                "s: key `dimensions`: expected 2 or 3, got -1",
+            ),
+            (
+                format!("dimensions = 2.5\n{base}"),
+                "s: key `dimensions`: expected a whole number, got 2.5",
             ),
             (
                 format!("{base}[fibre]\nbeads = 3\n"),
