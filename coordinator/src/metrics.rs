@@ -6,69 +6,110 @@ use cosim::BeadState;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
-/// Metric names a scene may ask for in `analysis.metrics`.
-pub const KNOWN: &[&str] = &[
-    "tip_deflection_over_length",
-    "tip_rotation",
-    "twist_angle",
-    "couette_max_error",
-    "drag_ratio",
-    "drag_coefficient",
-    "tumbling_period_gamma",
-    "min_end_to_end_over_length",
-    "bend_relaxation_time",
-    "orbit",
-    "half_turn_period_gamma",
-    "effective_aspect_ratio",
-    "stuck_angle_deg",
-    "surface_tension",
-    "contact_angle_deg",
-    "laplace_pressure_jump",
-    "final_tilt_deg",
-    "wrap",
-    "curvature_radius_over_droplet_radius",
+/// What a metric needs of the scene's tables, and whether it reads fibre 0's orientation
+/// at every step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Needs {
+    fluid: bool,
+    walls: bool,
+    binary: bool,
+    fibre: bool,
+    trajectory: bool,
+}
+
+const NONE: Needs = Needs {
+    fluid: false,
+    walls: false,
+    binary: false,
+    fibre: false,
+    trajectory: false,
+};
+/// A fibre alone (cantilever, torsion).
+const FIBRE: Needs = Needs {
+    fibre: true,
+    ..NONE
+};
+/// A fibre whose orientation is kept every step.
+const TRACKED: Needs = Needs {
+    trajectory: true,
+    ..FIBRE
+};
+/// A fluid with a body held in it.
+const FLUID: Needs = Needs {
+    fluid: true,
+    ..NONE
+};
+/// A fluid between walls.
+const SHEAR: Needs = Needs {
+    walls: true,
+    ..FLUID
+};
+/// A fibre tracked in a wall shear (the orbit metrics, S2023 section IV).
+const ORBIT: Needs = Needs {
+    walls: true,
+    fluid: true,
+    ..TRACKED
+};
+/// A binary fluid (L2020 section 3.3).
+const BINARY: Needs = Needs {
+    binary: true,
+    ..NONE
+};
+/// A fibre at a binary fluid's interface (L2020 sections 3.4-3.5).
+const AT_INTERFACE: Needs = Needs {
+    fibre: true,
+    ..BINARY
+};
+
+/// Every metric a scene may ask for in `analysis.metrics`, with what it needs.
+const METRICS: &[(&str, Needs)] = &[
+    ("tip_deflection_over_length", FIBRE),
+    ("tip_rotation", FIBRE),
+    ("twist_angle", FIBRE),
+    ("couette_max_error", SHEAR),
+    ("drag_ratio", FLUID),
+    ("drag_coefficient", FLUID),
+    ("tumbling_period_gamma", ORBIT),
+    ("min_end_to_end_over_length", TRACKED),
+    ("bend_relaxation_time", TRACKED),
+    ("orbit", ORBIT),
+    ("half_turn_period_gamma", ORBIT),
+    ("effective_aspect_ratio", ORBIT),
+    ("stuck_angle_deg", ORBIT),
+    ("surface_tension", BINARY),
+    ("contact_angle_deg", BINARY),
+    ("laplace_pressure_jump", BINARY),
+    ("final_tilt_deg", AT_INTERFACE),
+    ("wrap", AT_INTERFACE),
+    ("curvature_radius_over_droplet_radius", AT_INTERFACE),
 ];
 
+/// Metric names a scene may ask for in `analysis.metrics`.
+pub fn known() -> impl Iterator<Item = &'static str> + Clone {
+    METRICS.iter().map(|(name, _)| *name)
+}
+
+fn needs(name: &str) -> Option<Needs> {
+    METRICS.iter().find(|(n, _)| *n == name).map(|(_, w)| *w)
+}
+
 /// What metric `name` needs of `scene` that the scene lacks, in words (`None`: nothing
-/// missing), so that `check` refuses a metric no run of the scene could compute. Only the
-/// tables are checked here; the run says what else is missing (a load, a long enough run).
+/// missing, or not a metric), so that `check` refuses a metric no run of the scene could
+/// compute. Only the tables are checked here; the run says what else is missing (a load, a
+/// long enough run).
 pub fn unmet_need(name: &str, scene: &crate::scene::Scene) -> Option<&'static str> {
-    let orbit = ORBIT_METRICS.contains(&name);
-    let walls = orbit || matches!(name, "couette_max_error" | "tumbling_period_gamma");
-    let fluid = walls || matches!(name, "drag_ratio" | "drag_coefficient");
-    let binary = matches!(
-        name,
-        "surface_tension"
-            | "contact_angle_deg"
-            | "laplace_pressure_jump"
-            | "final_tilt_deg"
-            | "wrap"
-            | "curvature_radius_over_droplet_radius"
-    );
-    let fibre = orbit
-        || matches!(
-            name,
-            "tip_deflection_over_length"
-                | "tip_rotation"
-                | "twist_angle"
-                | "tumbling_period_gamma"
-                | "min_end_to_end_over_length"
-                | "bend_relaxation_time"
-                | "final_tilt_deg"
-                | "wrap"
-                | "curvature_radius_over_droplet_radius"
-        );
+    let w = needs(name)?;
     let has_binary = scene
         .fluid
         .as_ref()
         .is_some_and(|f| f.contains_key("binary"));
-    if fluid && scene.fluid.is_none() {
+    if w.fluid && scene.fluid.is_none() {
         Some("needs a fluid ([fluid])")
-    } else if walls && scene.walls.is_none() {
+    } else if w.walls && scene.walls.is_none() {
         Some("needs walls ([walls] velocity = [bottom, top])")
-    } else if binary && !has_binary {
+    } else if w.binary && !has_binary {
         Some("needs a binary fluid ([fluid.binary])")
-    } else if fibre && scene.fibre.is_empty() {
+    } else if w.fibre && scene.fibre.is_empty() {
         Some("needs a fibre ([[fibre]])")
     } else {
         None
@@ -85,13 +126,7 @@ const ORBIT_METRICS: &[&str] = &[
 
 /// Whether metric `name` needs fibre 0's orientation at every step.
 pub fn needs_trajectory(name: &str) -> bool {
-    [
-        "tumbling_period_gamma",
-        "min_end_to_end_over_length",
-        "bend_relaxation_time",
-    ]
-    .contains(&name)
-        || ORBIT_METRICS.contains(&name)
+    needs(name).is_some_and(|w| w.trajectory)
 }
 
 /// Everything a metric may look at, at the end of a run.

@@ -309,11 +309,11 @@ fn check_ranges(s: &Scene) -> Result<(), SceneError> {
         return Err(err("key `output.interval`: expected at least 1, got 0"));
     }
     for m in &s.analysis.metrics {
-        if !crate::metrics::KNOWN.contains(&m.as_str()) {
+        if !crate::metrics::known().any(|k| k == m) {
             return Err(err(format!(
                 "key `analysis.metrics`: unknown metric `{m}`{} (known: {})",
-                cosim::scene_keys::did_you_mean(m, crate::metrics::KNOWN.iter().copied()),
-                crate::metrics::KNOWN.join(", ")
+                cosim::scene_keys::did_you_mean(m, crate::metrics::known()),
+                crate::metrics::known().collect::<Vec<_>>().join(", ")
             )));
         }
         if let Some(why) = crate::metrics::unmet_need(m, s) {
