@@ -99,18 +99,25 @@ fn needs(name: &str) -> Option<Needs> {
 /// long enough run).
 pub fn unmet_need(name: &str, scene: &crate::scene::Scene) -> Option<&'static str> {
     let w = needs(name)?;
+    let beads_of_fibre_0 = scene
+        .fibre
+        .first()
+        .and_then(|f| f.get("beads"))
+        .and_then(|b| b.as_integer());
     let has_binary = scene
         .fluid
         .as_ref()
         .is_some_and(|f| f.contains_key("binary"));
     if w.fluid && scene.fluid.is_none() {
-        Some("needs a fluid ([fluid])")
+        Some("needs a fluid ([fluid]), which the scene has not")
     } else if w.walls && scene.walls.is_none() {
-        Some("needs walls ([walls] velocity = [bottom, top])")
+        Some("needs walls ([walls] velocity = [bottom, top]), which the scene has not")
     } else if w.binary && !has_binary {
-        Some("needs a binary fluid ([fluid.binary])")
+        Some("needs a binary fluid ([fluid.binary]), which the scene has not")
     } else if w.fibre && scene.fibre.is_empty() {
-        Some("needs a fibre ([[fibre]])")
+        Some("needs a fibre ([[fibre]]), which the scene has not")
+    } else if w.fibre && beads_of_fibre_0.is_some_and(|n| n < 2) {
+        Some("needs fibre 0 to be a chain of 2 beads or more (a single bead has no ends to tell apart)")
     } else {
         None
     }

@@ -317,9 +317,7 @@ fn check_ranges(s: &Scene) -> Result<(), SceneError> {
             )));
         }
         if let Some(why) = crate::metrics::unmet_need(m, s) {
-            return Err(err(format!(
-                "key `analysis.metrics`: metric `{m}` {why}, which the scene has not"
-            )));
+            return Err(err(format!("key `analysis.metrics`: metric `{m}` {why}")));
         }
     }
     Ok(())
@@ -525,6 +523,20 @@ mod tests {
             .unwrap()
             .contains("needs walls"));
         assert!(walls("drag_ratio").is_none());
+        // One bead is no chain: no tip, no end-to-end vector, no orbit.
+        let one = base.replace("beads = 3", "beads = 1");
+        for m in ["tip_rotation", "min_end_to_end_over_length"] {
+            let e = from_text(&format!("{one}[analysis]\nmetrics = [\"{m}\"]\n"), "s", &[])
+                .unwrap_err()
+                .0;
+            assert_eq!(
+                e,
+                format!(
+                    "key `analysis.metrics`: metric `{m}` needs fibre 0 to be a chain of 2 beads \
+                     or more (a single bead has no ends to tell apart)"
+                )
+            );
+        }
     }
 
     /// Values of the wrong kind and tables with the wrong brackets are named in plain words,

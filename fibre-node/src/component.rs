@@ -492,7 +492,7 @@ impl Component for FibreComponent {
                 param("fibre.N.wall_contact", "1", Some("false"), "true (scenes with walls): a bead whose sphere reaches past a wall's face is pushed back along the wall's normal, with the fibre's axial bond stiffness (frictionless; neither paper has it, so off by default; without it an SPM bead can sink into a wall slab: watch the wall_overlap diagnostic)"),
                 param("fibre.N.initial_bend", len, Some("0.0"), "amplitude of an S-shaped initial offset across direction (one sine wave along the fibre): seeds buckling; the fibre is at rest but not stress-free"),
                 param("fibre.N.clamp", "1", Some("[]"), "indices of clamped beads (negative counts from the end): fixed position and orientation; under fpd-lbm held in place by a proportional-integral force (its steady value is minus the drag)"),
-                param("fibre.N.loads", "1", Some("[]"), "constant point loads: tables { bead, force, torque }"),
+                param("fibre.N.loads", "1", Some("[]"), "constant point loads on free beads (a clamped bead is refused): tables { bead, force, torque }"),
                 param("fibre.N.loads.M.bead", "1", None, "bead index (negative counts from the end)"),
                 param("fibre.N.loads.M.force", "mass length / time^2", Some("[0.0, 0.0, 0.0]"), "force, laboratory frame"),
                 param("fibre.N.loads.M.torque", "mass length^2 / time^2", Some("[0.0, 0.0, 0.0]"), "torque, laboratory frame (cohesive beam only)"),

@@ -543,7 +543,7 @@ start = [1, 2, 0]
 direction = [0, 2, 0]
 spacing = 2.5
 clamp = [0, -1, 0]
-loads = [{ bead = -1, force = [0, -1, 0] }, { bead = 3, torque = [0, 0, 0.5] }]
+loads = [{ bead = -2, force = [0, -1, 0] }, { bead = 3, torque = [0, 0, 0.5] }]
 damping = 0.1
 substeps = 4
 affinity = 0.2
@@ -556,7 +556,7 @@ method = "spm"
         let f = &s.fibres[0];
         assert_eq!(f.direction, [0.0, 1.0, 0.0]);
         assert_eq!(f.clamp, vec![0, 9]);
-        assert_eq!(f.loads[0].bead, 9);
+        assert_eq!(f.loads[0].bead, 8);
         assert_eq!(f.loads[1].torque, [0.0, 0.0, 0.5]);
         assert_eq!(f.substeps, 4);
         assert_eq!(f.affinity, 0.2);
@@ -806,6 +806,10 @@ youngs_modulus = 1.0
                 "fibre.0.clamp: bead index 12 is out of range for a fibre of 10 beads (expected -10..=9)",
             ),
             ("clamp = [-11]", "fibre.0.clamp: bead index -11"),
+            (
+                "clamp = [0]\nloads = [{ bead = 1 }, { bead = -10, force = [0, 1, 0] }]",
+                "fibre.0.loads.1.bead: bead 0 is clamped (fibre.0.clamp), so a load on it does nothing",
+            ),
             ("foo = 1", "fibre.0: unknown key `foo`"),
             ("damping = -1", "fibre.0.damping: expected a number >= 0, got -1"),
             ("substeps = 0", "fibre.0.substeps: expected an integer in 1..=1000000, got 0"),

@@ -147,6 +147,17 @@ pub(crate) fn validate_fibre(
         .enumerate()
         .map(|(k, l)| load(&format!("{p}.loads.{k}"), l, beads, dims, model))
         .collect::<Result<Vec<_>, _>>()?;
+    if let Some((k, l)) = loads
+        .iter()
+        .enumerate()
+        .find(|(_, l)| clamp.contains(&l.bead))
+    {
+        return Err(format!(
+            "{p}.loads.{k}.bead: bead {} is clamped ({p}.clamp), so a load on it does nothing; \
+             load a free bead",
+            l.bead
+        ));
+    }
     let damping = optional(p, "damping", raw.damping, non_negative)?.unwrap_or(0.0);
     let internal_damping =
         optional(p, "internal_damping", raw.internal_damping, non_negative)?.unwrap_or(0.0);
