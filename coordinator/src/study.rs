@@ -684,11 +684,10 @@ fn row(
     })
 }
 
-/// The study's files in `out`: `<name>.csv` and `.md` (the table, then `note`), `.png`
-/// (error against wall time, where the metric has a reference), `_curve.png` and
-/// `_diagram.png` where the study asks for them. Returns the markdown.
-/// Write the table (CSV, markdown) and plots; returns the markdown table followed by a line
-/// naming the files written.
+/// The study's files in `out`: `<name>.csv` and `.md` (the table, the keys its labels leave
+/// out, then `note`), `.png` (error against wall time, where the metric has a reference),
+/// `_curve.png` and `_diagram.png` where the study asks for them. Returns the markdown table
+/// followed by a line naming the files written.
 fn write_outputs(study: &Study, rows: &[Row], note: &str, out: &Path) -> Result<String, String> {
     let mut written = vec![
         out.join(format!("{}.csv", study.name)),
@@ -700,7 +699,7 @@ fn write_outputs(study: &Study, rows: &[Row], note: &str, out: &Path) -> Result<
     };
     write(&written[0], &render_csv(rows, curve_name))?;
     let title = study.title.clone().unwrap_or_else(|| study.name.clone());
-    let md = render_markdown(&title, &study.metric, rows, curve_name) + note;
+    let md = render_markdown(&title, &study.metric, rows, curve_name) + &unlabelled(study) + note;
     write(&written[1], &md)?;
     let points: Vec<crate::plot::CostPoint> = rows
         .iter()
@@ -834,6 +833,35 @@ pub fn render_csv(rows: &[Row], curve: Option<&str>) -> String {
     s
 }
 
+/// A line under the table naming the keys of `[[vary]]` groups that the rows' labels leave
+/// out (a label shows only the keys that tell its group's rows apart), so that a reader of
+/// `grid=[180, 180]` knows the bead radius changed with it; empty where labels show every key.
+fn unlabelled(study: &Study) -> String {
+    let hidden: Vec<String> = study
+        .vary
+        .iter()
+        .enumerate()
+        .flat_map(|(i, v)| {
+            let shown = v.label_keys(i).unwrap_or_default();
+            v.key
+                .iter()
+                .chain(&v.keys)
+                // The steps have a column of their own.
+                .filter(|k| !shown.contains(k) && k.as_str() != "time.steps")
+                .map(|k| format!("`{k}`"))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    if hidden.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "\nVaried with the keys the labels show (values in the study file): {}.\n",
+            hidden.join(", ")
+        )
+    }
+}
+
 /// The rows as a markdown table; with a `[curve]` (named `curve`) a column for its abscissa
 /// follows the variant.
 pub fn render_markdown(title: &str, metric: &str, rows: &[Row], curve: Option<&str>) -> String {
@@ -941,6 +969,30 @@ mod tests {
         assert!(plain.lines().next().unwrap().ends_with(",x,y"));
         assert_eq!(plain.lines().nth(1).unwrap().split(',').count(), 10);
         assert!(!render_markdown("t", "m", &[r], None).contains("fluid.re"));
+    }
+
+    /// The keys of a `[[vary]]` group that its labels leave out are named under the table.
+    #[test]
+    fn keys_the_labels_leave_out_are_named_under_the_table() {
+        let study = |vary: &str| -> Study {
+            toml::from_str(&format!(
+                "name = \"s\"\nscene = \"x.toml\"\nmetric = \"m\"\n[[vary]]\n{vary}"
+            ))
+            .unwrap()
+        };
+        let grouped = study(
+            "keys = [\"fluid.grid\", \"fibre.0.bead_radius\", \"time.dt\"]\n\
+             values = [[[180, 180], 6.0, 0.7], [[270, 270], 9.0, 1.575]]",
+        );
+        assert_eq!(
+            unlabelled(&grouped),
+            "\nVaried with the keys the labels show (values in the study file): \
+             `fibre.0.bead_radius`, `time.dt`.\n"
+        );
+        assert_eq!(
+            unlabelled(&study("key = \"fluid.xi\"\nvalues = [1, 2]")),
+            ""
+        );
     }
 
     /// A class is shown alone for `orbit`, whose value is only the class's code, and with
