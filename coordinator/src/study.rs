@@ -438,9 +438,31 @@ fn toml_inline(v: &toml::Value) -> String {
     v.to_string()
 }
 
+/// A key set by `[set]` or varied by one `[[vary]]` entry only: a second would override the
+/// first in every variant, so that variants meant to differ ran the same scene.
+fn one_owner_per_key(study: &Study) -> Result<(), String> {
+    let mut owner: BTreeMap<&str, String> = study
+        .set
+        .keys()
+        .map(|k| (k.as_str(), "set by [set]".to_string()))
+        .collect();
+    for (i, v) in study.vary.iter().enumerate() {
+        for k in v.key.iter().chain(&v.keys) {
+            if let Some(first) = owner.insert(k, format!("varied by vary.{i}")) {
+                return Err(format!(
+                    "vary.{i}: `{k}` is already {first}, and the later would override the \
+                     earlier in every variant; give each key in one place"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Every variant of `study`: its overrides, label and loaded scene, in the order of the
 /// table (the last `[[vary]]` entry varies fastest).
 fn prepare(study: &Study, scene_path: &Path) -> Result<Vec<Variant>, String> {
+    one_owner_per_key(study)?;
     let mut variants: Vec<Vec<(String, toml::Value)>> = vec![Vec::new()];
     for (i, v) in study.vary.iter().enumerate() {
         let options = v.assignments(i)?;
@@ -993,6 +1015,32 @@ mod tests {
             unlabelled(&study("key = \"fluid.xi\"\nvalues = [1, 2]")),
             ""
         );
+    }
+
+    /// A key given twice (in [set] and a [[vary]] entry, or in two entries) is refused: the
+    /// later would override the earlier, and variants meant to differ would run one scene.
+    #[test]
+    fn a_key_is_given_in_one_place_only() {
+        let study = |rest: &str| -> Study {
+            toml::from_str(&format!(
+                "name = \"s\"\nscene = \"x.toml\"\nmetric = \"m\"\n{rest}"
+            ))
+            .unwrap()
+        };
+        let two = study(
+            "[[vary]]\nkey = \"fibre.0.beads\"\nvalues = [4, 5]\n\
+             [[vary]]\nkeys = [\"time.dt\", \"fibre.0.beads\"]\nvalues = [[0.1, 6]]\n",
+        );
+        assert_eq!(
+            one_owner_per_key(&two).unwrap_err(),
+            "vary.1: `fibre.0.beads` is already varied by vary.0, and the later would \
+             override the earlier in every variant; give each key in one place"
+        );
+        let set = study("[set]\n\"time.dt\" = 0.1\n[[vary]]\nkey = \"time.dt\"\nvalues = [1]\n");
+        assert!(one_owner_per_key(&set)
+            .unwrap_err()
+            .starts_with("vary.0: `time.dt` is already set by [set]"));
+        assert!(one_owner_per_key(&study("[[vary]]\nkey = \"time.dt\"\nvalues = [1]\n")).is_ok());
     }
 
     /// A class is shown alone for `orbit`, whose value is only the class's code, and with
