@@ -141,6 +141,16 @@ impl Vary {
                 "vary.{i}.values: expected at least one value (an empty list makes no variants)"
             ));
         }
+        // The same value twice would run the same variants twice.
+        for (j, v) in self.values.iter().enumerate() {
+            if let Some(k) = self.values[..j].iter().position(|w| w == v) {
+                return Err(format!(
+                    "vary.{i}.values: {} is given twice (entries {k} and {j}), which would run \
+                     the same variants twice; give each value once",
+                    toml_inline(v)
+                ));
+            }
+        }
         self.values
             .iter()
             .enumerate()
@@ -959,8 +969,16 @@ mod tests {
             "keys = [\"fluid.confinement\", \"time.steps\"]\nvalues = [[0.3, 79800], [0.5, 48000]]",
         );
         assert_eq!(v.label_keys(0).unwrap(), ["fluid.confinement"]);
-        let v = vary("key = \"fibre.0.bending_number\"\nvalues = [3.3, 3.3]");
+        let v = vary("key = \"fibre.0.bending_number\"\nvalues = [3.3]");
         assert_eq!(v.label_keys(0).unwrap(), ["fibre.0.bending_number"]);
+        let e = vary("key = \"fibre.0.beads\"\nvalues = [4, 5, 4]")
+            .label_keys(1)
+            .unwrap_err();
+        assert_eq!(
+            e,
+            "vary.1.values: 4 is given twice (entries 0 and 2), which would run the same \
+             variants twice; give each value once"
+        );
         // An empty list would make a study of no variants, which "passes" doing nothing.
         let e = vary("key = \"fibre.0.beads\"\nvalues = []")
             .label_keys(2)
