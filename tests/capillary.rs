@@ -239,6 +239,11 @@ fn contact_angle_40_deg_within_3_deg_at_the_scene_resolution() {
         (before - last).abs() < 0.5,
         "not settled: {before} -> {last}"
     );
+    // The summary's own steadiness measure is this one: the change since step 60 000, the
+    // start of the last fifth (coordinator/src/steady_watch.rs), within its 0.5 deg.
+    let change = m["extra"]["change_over_last_fifth"].as_f64().unwrap();
+    assert!((change - (before - last).abs()).abs() < 1e-12, "{change}");
+    assert_eq!(s["warnings"], serde_json::json!([]));
 }
 
 /// The same angle with r_b = 8, ξ = 2 (r_b / ξ = 4, the small grid of the tests above): the

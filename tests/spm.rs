@@ -137,7 +137,7 @@ fn a_drag_read_before_the_flow_is_steady_is_flagged() {
     assert!(m["note"].as_str().unwrap().starts_with("not steady"), "{m}");
     let w = s["warnings"][0].as_str().unwrap();
     assert!(
-        w.contains("the flow is not yet steady; raise time.steps"),
+        w.contains("the run is not yet steady; raise time.steps"),
         "{w}"
     );
     // docs/summary.md documents every key of the summary and of a metric.

@@ -431,12 +431,14 @@ pub fn compute(
             "drag_ratio" => drag_ratio(ctx)?,
             "drag_coefficient" => drag_coefficient(ctx)?,
             "surface_tension" | "contact_angle_deg" | "laplace_pressure_jump" => {
-                crate::capillary_metrics::capillary_metric(
+                let mut m = crate::capillary_metrics::capillary_metric(
                     name,
                     ctx.diagnostics,
                     ctx.derived,
                     ctx.scene.dimensions.into(),
-                )?
+                )?;
+                steadiness(&mut m, name, ctx);
+                m
             }
             n if crate::interface_metrics::INTERFACE_METRICS.contains(&n) => {
                 crate::interface_metrics::interface_metric(n, ctx)?
@@ -764,12 +766,9 @@ fn steadiness(m: &mut Metric, name: &str, ctx: &Context) {
     let end = crate::steady_watch::quantity(name, ctx.diagnostics);
     if let Some(c) = ctx.trajectory.steady.change(name, ctx.time, end) {
         m.extra
-            .insert(crate::steady_watch::CHANGE_EXTRA.into(), c.relative);
-        if c.relative > crate::steady_watch::STEADY_CHANGE {
-            let not_steady = format!(
-                "not steady: {:.2} % change over the run's last fifth",
-                100.0 * c.relative
-            );
+            .insert(crate::steady_watch::CHANGE_EXTRA.into(), c.amount);
+        if c.exceeds() {
+            let not_steady = format!("not steady: {} change over the run's last fifth", c.words());
             m.note = if m.note.is_empty() {
                 not_steady
             } else {

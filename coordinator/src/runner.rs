@@ -767,7 +767,6 @@ fn drive(
             )));
         }
         st.watches.observe(step + 1, &report);
-        trajectory.steady.observe(step + 1, steps, st.time, &report);
         st.last_diagnostics = report;
         let at_rest = scene
             .scene
@@ -789,6 +788,10 @@ fn drive(
         }
         let last = step + 1 == steps || at_rest || stop;
         let log_due = (step + 1) % interval == 0 || last;
+        let sample = (step + 1, steps, log_due);
+        trajectory
+            .steady
+            .observe(sample, st.time, &st.last_diagnostics);
         let snapshot_due = snapshots.as_ref().is_some_and(|s| s.due(step + 1, last));
         if has_beads && (log_due || snapshot_due) {
             exchange
