@@ -231,6 +231,9 @@ pub struct Row {
     pub wall_seconds: f64,
     pub steps: u64,
     pub status: String,
+    /// How many warnings the run's summary has (beads in a wall, a state not yet steady,
+    /// ...): shown next to the status in the markdown table.
+    pub warnings: usize,
     /// The metric's label, for a categorical metric (`orbit`).
     pub class: Option<String>,
     /// The diagram's coordinates, read from the summary's derived values.
@@ -587,6 +590,7 @@ pub fn run(study: &Study, scene_path: &Path, out: &Path, runs: Runs) -> Result<S
                     wall_seconds: 0.0,
                     steps: 0,
                     status: "failed".into(),
+                    warnings: 0,
                     class: None,
                     point: None,
                     resolution,
@@ -688,6 +692,14 @@ fn row(
         }
         None => s["status"].as_str().unwrap_or("").to_string(),
     };
+    let warnings = s["warnings"].as_array().map_or(0, Vec::len);
+    for w in s["warnings"].as_array().into_iter().flatten() {
+        eprintln!(
+            "study {}: variant {label}: warning: {}",
+            study.name,
+            w.as_str().unwrap_or_default()
+        );
+    }
     let point = study
         .diagram
         .as_ref()
@@ -709,6 +721,7 @@ fn row(
         wall_seconds: s["wall_seconds"].as_f64().unwrap_or(0.0),
         steps: s["steps"].as_u64().unwrap_or(0),
         status,
+        warnings,
         class: m["label"].as_str().map(str::to_string),
         point,
         resolution,
@@ -926,7 +939,17 @@ pub fn render_markdown(title: &str, metric: &str, rows: &[Row], curve: Option<&s
                 .map_or(String::new(), |e| format!("{:.3} %", 100.0 * e)),
             r.wall_seconds,
             r.steps,
-            r.status
+            match r.warnings {
+                0 => r.status.clone(),
+                1 => format!("{} (1 warning)", r.status),
+                n => format!("{} ({n} warnings)", r.status),
+            }
+        );
+    }
+    if rows.iter().any(|r| r.warnings > 0) {
+        s.push_str(
+            "\nA run's warnings are in its summary.json (`warnings`), and the study printed \
+             them as it ran.\n",
         );
     }
     s
@@ -945,6 +968,7 @@ mod tests {
             wall_seconds: 1.0,
             steps: 1,
             status: "completed".into(),
+            warnings: 0,
             class: None,
             point: None,
             resolution: Some(n),
@@ -1071,8 +1095,17 @@ mod tests {
         assert!(md.contains("| n=8 | jeffery | "), "{md}");
         r.class = Some("full".into());
         r.value = 0.7565195983599549;
-        let md = render_markdown("t", "wrap", &[r], None);
+        let md = render_markdown("t", "wrap", std::slice::from_ref(&r), None);
         assert!(md.contains("| n=8 | full (0.756520) | "), "{md}");
+        assert!(!md.contains("warning"));
+        // A run that warned says so next to its status.
+        r.warnings = 2;
+        let md = render_markdown("t", "wrap", &[r], None);
+        assert!(md.contains("| completed (2 warnings) |"), "{md}");
+        assert!(
+            md.contains("A run's warnings are in its summary.json"),
+            "{md}"
+        );
     }
 
     /// v(n) = 2 + 3 n^-p sampled at three resolutions, in any order: the two finest give
