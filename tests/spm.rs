@@ -16,6 +16,22 @@ fn couette_profile_is_linear() {
         "Couette profile off by {:.2} % of the wall speed",
         100.0 * err
     );
+    // Read from a steady flow: the error moved by less than 1e-3 over the last fifth
+    // (coordinator/src/steady_watch.rs); 500 steps from rest are flagged.
+    let change = s["metrics"]["couette_max_error"]["extra"]["change_over_last_fifth"]
+        .as_f64()
+        .unwrap();
+    assert!(change < 1e-3, "{change}");
+    let early = run_in_process(
+        &config("spm/couette.toml"),
+        &["time.steps=500".to_string()],
+        "spm-couette-early",
+    );
+    let w = early["warnings"][0].as_str().unwrap_or_default();
+    assert!(
+        w.contains("`couette_max_error`") && w.contains("not yet steady"),
+        "{early}"
+    );
     let effects: Vec<&str> = s["effects"]
         .as_array()
         .unwrap()

@@ -421,13 +421,18 @@ pub fn compute(
         let m = match name.as_str() {
             // Already an error relative to the wall-speed difference: its reference is 0, so
             // that studies plot it against wall time like any other error.
-            "couette_max_error" => Metric::with_reference(
-                lookup(ctx.diagnostics, "couette_max_error")
-                    .ok_or("metric `couette_max_error` needs walls and a fluid that reports it")?,
-                0.0,
-                "the exact Couette profile (linear; S2023 eq. 13 with solid layers), error over \
-                 the wall-speed difference",
-            ),
+            "couette_max_error" => {
+                let mut m = Metric::with_reference(
+                    lookup(ctx.diagnostics, "couette_max_error").ok_or(
+                        "metric `couette_max_error` needs walls and a fluid that reports it",
+                    )?,
+                    0.0,
+                    "the exact Couette profile (linear; S2023 eq. 13 with solid layers), error \
+                     over the wall-speed difference",
+                );
+                steadiness(&mut m, name, ctx);
+                m
+            }
             "drag_ratio" => drag_ratio(ctx)?,
             "drag_coefficient" => drag_coefficient(ctx)?,
             "surface_tension" | "contact_angle_deg" | "laplace_pressure_jump" => {

@@ -2,13 +2,15 @@
 //!
 //! Some metrics read the last step and compare it with the reference of a steady state: the
 //! drag of a held body (`drag_ratio`, `drag_coefficient`: the periodic array's drag, Dennis &
-//! Chang's C_D) and the equilibria of a binary fluid (`surface_tension`,
-//! `laplace_pressure_jump`, `contact_angle_deg`: L2020 section 3.3). A run that ends while
+//! Chang's C_D), the Couette profile between walls (`couette_max_error`) and the equilibria
+//! of a binary fluid (`surface_tension`, `laplace_pressure_jump`, `contact_angle_deg`: L2020
+//! section 3.3). A run that ends while
 //! the state still changes compares a transient, and nothing in the value says so. The
 //! history keeps, at about [`SAMPLES`] evenly spaced steps and at every logged step, the
 //! quantity each of these metrics reads, and the metric reports the quantity's change over
 //! the run's last fifth ([`LAST_PART`]); past [`STEADY_CHANGE`] (relative; for an angle
-//! [`STEADY_DEGREES`]) the summary warns.
+//! [`STEADY_DEGREES`], for the Couette error, already a fraction of the wall speeds,
+//! [`STEADY_ERROR`]) the summary warns.
 //!
 //! Measured on the shipped scenes: the FPD cylinder of configs/fpd/cylinder_drag.toml changes
 //! its holding force by 0.06 % over the last fifth of its 12 800 steps (2 % between steps
@@ -21,9 +23,10 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// The metrics that compare the last step with the reference of a steady state.
-pub const STEADY_METRICS: [&str; 5] = [
+pub const STEADY_METRICS: [&str; 6] = [
     "drag_ratio",
     "drag_coefficient",
+    "couette_max_error",
     "surface_tension",
     "laplace_pressure_jump",
     "contact_angle_deg",
@@ -42,7 +45,12 @@ pub const STEADY_CHANGE: f64 = 0.01;
 /// A change of an angle over the last part (degrees) past which it is not steady.
 pub const STEADY_DEGREES: f64 = 0.5;
 
-/// Name of the metric's extra value that holds the change (relative; degrees for an angle).
+/// A change of the Couette error (a fraction of the wall-speed difference) over the last
+/// part past which the flow is not steady: a tenth of the 1 % the profile is held to.
+pub const STEADY_ERROR: f64 = 1e-3;
+
+/// Name of the metric's extra value that holds the change (relative; degrees for an angle;
+/// for the Couette error, its own change).
 pub const CHANGE_EXTRA: &str = "change_over_last_fifth";
 
 /// What a steady metric reads at one step, from the step's diagnostics, up to constant
@@ -61,22 +69,37 @@ pub fn quantity(metric: &str, diagnostics: &[(String, f64)]) -> Option<f64> {
         // The jump over sigma / R: the ratio the metric compares, times sigma.
         "laplace_pressure_jump" => Some(d("pressure_jump")? * d("droplet_radius")?),
         "contact_angle_deg" => d("contact_angle_deg"),
+        "couette_max_error" => d("couette_max_error"),
         _ => None,
     }
 }
 
-/// An angle's change is measured in degrees; any other quantity's relative to its last value.
-fn in_degrees(metric: &str) -> bool {
-    metric.ends_with("_deg")
+/// How a quantity's change is measured.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Measure {
+    /// Relative to its last value, against [`STEADY_CHANGE`].
+    Relative,
+    /// An angle, in degrees, against [`STEADY_DEGREES`].
+    Degrees,
+    /// An error that is already a fraction of a scale (the Couette error: of the wall
+    /// speeds), as it is, against [`STEADY_ERROR`].
+    Fraction,
+}
+
+fn measure(metric: &str) -> Measure {
+    match metric {
+        m if m.ends_with("_deg") => Measure::Degrees,
+        "couette_max_error" => Measure::Fraction,
+        _ => Measure::Relative,
+    }
 }
 
 /// What the quantity of a steady metric did over the run's last part.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Change {
-    /// `|q(t_end) - q(t_from)|`, over `|q(t_end)|` except for an angle (degrees).
+    /// `|q(t_end) - q(t_from)|`, over `|q(t_end)|` where `measure` is relative.
     pub amount: f64,
-    /// Whether `amount` is in degrees (an angle) rather than relative.
-    pub degrees: bool,
+    pub measure: Measure,
     /// The time of the sample the change is measured from: the last at or before
     /// `(1 - LAST_PART) t_end`.
     pub from_time: f64,
@@ -87,19 +110,19 @@ impl Change {
     /// Past [`STEADY_CHANGE`] ([`STEADY_DEGREES`] for an angle).
     pub fn exceeds(&self) -> bool {
         self.amount
-            > if self.degrees {
-                STEADY_DEGREES
-            } else {
-                STEADY_CHANGE
+            > match self.measure {
+                Measure::Relative => STEADY_CHANGE,
+                Measure::Degrees => STEADY_DEGREES,
+                Measure::Fraction => STEADY_ERROR,
             }
     }
 
-    /// The change in words: "1.29 %" or "0.69 deg".
+    /// The change in words: "1.29 %", "0.69 deg", or "2.1e-3 of the wall speeds".
     pub fn words(&self) -> String {
-        if self.degrees {
-            format!("{:.2} deg", self.amount)
-        } else {
-            format!("{:.2} %", 100.0 * self.amount)
+        match self.measure {
+            Measure::Relative => format!("{:.2} %", 100.0 * self.amount),
+            Measure::Degrees => format!("{:.2} deg", self.amount),
+            Measure::Fraction => format!("{:.1e} of the wall speeds", self.amount),
         }
     }
 
@@ -159,8 +182,9 @@ impl SteadyHistory {
     /// `(1 - LAST_PART) end_time` to its value `end` at `end_time`; `None` without such a
     /// sample (a run too short to say) or without a value at the end.
     pub fn change(&self, metric: &str, end_time: f64, end: Option<f64>) -> Option<Change> {
-        let degrees = in_degrees(metric);
-        let end = end.filter(|e| e.is_finite() && (degrees || *e != 0.0))?;
+        let measure = measure(metric);
+        let relative = measure == Measure::Relative;
+        let end = end.filter(|e| e.is_finite() && (!relative || *e != 0.0))?;
         let cut = (1.0 - LAST_PART) * end_time;
         let &(from_time, from) = self
             .samples
@@ -168,14 +192,14 @@ impl SteadyHistory {
             .iter()
             .rev()
             .find(|(t, _)| *t <= cut && *t > 0.0)?;
-        let amount = if degrees {
-            (end - from).abs()
-        } else {
+        let amount = if relative {
             ((end - from) / end).abs()
+        } else {
+            (end - from).abs()
         };
         Some(Change {
             amount,
-            degrees,
+            measure,
             from_time,
             end_time,
         })
@@ -229,7 +253,10 @@ mod tests {
             );
         }
         let c = h.change("contact_angle_deg", 1000.0, Some(86.0)).unwrap();
-        assert!(c.degrees && (c.amount - 0.8).abs() < 1e-9, "{c:?}");
+        assert!(
+            c.measure == Measure::Degrees && (c.amount - 0.8).abs() < 1e-9,
+            "{c:?}"
+        );
         assert!(c.exceeds() && c.words() == "0.80 deg");
         let still = h.change("contact_angle_deg", 1000.0, Some(86.6)).unwrap();
         assert!(!still.exceeds(), "{still:?}");
