@@ -27,10 +27,27 @@ pub fn run_dir(test: &str) -> PathBuf {
         .join(format!("{test}-{}", std::process::id()))
 }
 
-/// A fresh output directory for one test.
+/// A fresh output directory for one test. The directories that earlier test processes, no
+/// longer running, left for the same test go too: each run's folder stays for a look after
+/// a failure, until the test runs again.
 pub fn out_dir(test: &str) -> PathBuf {
     let d = run_dir(test);
     let _ = std::fs::remove_dir_all(&d);
+    let prefix = format!("{test}-");
+    let entries = d.parent().and_then(|p| std::fs::read_dir(p).ok());
+    for e in entries.into_iter().flatten().flatten() {
+        let name = e.file_name();
+        let pid = name
+            .to_str()
+            .and_then(|n| n.strip_prefix(&prefix))
+            .and_then(|p| p.parse::<u32>().ok());
+        if let Some(pid) = pid {
+            let running = Path::new("/proc").join(pid.to_string()).exists();
+            if pid != std::process::id() && !running {
+                let _ = std::fs::remove_dir_all(e.path());
+            }
+        }
+    }
     d
 }
 
