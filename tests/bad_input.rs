@@ -169,6 +169,18 @@ fn stiffness_beyond_any_time_step() {
         &GOOD.replace("youngs_modulus = 1.0e4", "youngs_modulus = 1e300"),
         &["too stiff for any time step", "fibre.0.youngs_modulus"],
     );
+    // A bead-spring chain: the keys its constants come from, as its table gives them.
+    let bead_spring = GOOD.replace("cohesive-beam", "bead-spring");
+    check(
+        "overflowing-bead-spring-modulus",
+        &bead_spring.replace("youngs_modulus = 1.0e4", "youngs_modulus = 1e300"),
+        &["lower its stiffness (fibre.0.youngs_modulus)"],
+    );
+    check(
+        "overflowing-bead-spring-spring",
+        &format!("{bead_spring}stretch_stiffness = 1e300\n"),
+        &["lower its stiffness (fibre.0.stretch_stiffness and fibre.0.youngs_modulus)"],
+    );
 }
 
 #[test]

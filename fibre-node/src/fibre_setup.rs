@@ -149,24 +149,52 @@ fn fpd_limit(
     let straight = Fibre::straight(&straight_cfg, scene.dimensions, false);
     let lim = fpd_stiffness_limit(&straight, fpd_mass, r_xi);
     if scene.dt > lim.dt_limit {
-        return Err(too_stiff_for_fpd(n, scene, f, &lim, fpd_mass, r_xi));
+        return Err(too_stiff_for_fpd((n, cfg), scene, f, &lim, fpd_mass, r_xi));
     }
     Ok(lim)
 }
 
+/// The keys of fibre `n` that set its stiffness, as its table gives them: the modulus of a
+/// cohesive beam; for a bead-spring chain the key each constant comes from (k_s:
+/// `stretch_number`, `stretch_stiffness` or `youngs_modulus`; k_b: `bending_number`,
+/// `bending_stiffness` or `youngs_modulus`).
+fn stiffness_keys(n: usize, cfg: &FibreConfig) -> String {
+    if cfg.model != ModelKind::BeadSpring {
+        return format!("fibre.{n}.youngs_modulus");
+    }
+    let source = |number: Option<f64>, stiffness: Option<f64>, names: [&'static str; 2]| {
+        if number.is_some() {
+            names[0]
+        } else if stiffness.is_some() {
+            names[1]
+        } else {
+            "youngs_modulus"
+        }
+    };
+    let k_s = source(
+        cfg.stretch_number,
+        cfg.stretch_stiffness,
+        ["stretch_number", "stretch_stiffness"],
+    );
+    let k_b = source(
+        cfg.bending_number,
+        cfg.bending_stiffness,
+        ["bending_number", "bending_stiffness"],
+    );
+    if k_s == k_b {
+        format!("fibre.{n}.{k_s}")
+    } else {
+        format!("fibre.{n}.{k_s} and fibre.{n}.{k_b}")
+    }
+}
+
 /// The refusal of fibre `n` when its stiffness overflows the frequency estimate (no step to
 /// quote), naming the keys that set it.
-fn overflowed(n: usize, lim: &StabilityLimit, bead_spring: bool) -> Option<String> {
+fn overflowed(n: usize, lim: &StabilityLimit, cfg: &FibreConfig) -> Option<String> {
     if lim.omega_max.is_finite() && lim.step_limit > 0.0 {
         return None;
     }
-    let keys = if bead_spring {
-        format!(
-            "fibre.{n}.stretch_stiffness, fibre.{n}.bending_stiffness or fibre.{n}.bending_number"
-        )
-    } else {
-        format!("fibre.{n}.youngs_modulus")
-    };
+    let keys = stiffness_keys(n, cfg);
     Some(format!(
         "fibre.{n} is too stiff for any time step: the frequency of its fastest mode overflows \
          (omega_max = {}); lower its stiffness ({keys})",
@@ -176,14 +204,14 @@ fn overflowed(n: usize, lim: &StabilityLimit, bead_spring: bool) -> Option<Strin
 
 /// The refusal of fibre `n`, whose FPD limit `lim` lies below the lattice step.
 fn too_stiff_for_fpd(
-    n: usize,
+    (n, cfg): (usize, &FibreConfig),
     scene: &SceneConfig,
     f: &Fibre,
     lim: &StabilityLimit,
     fpd_mass: f64,
     r_xi: f64,
 ) -> String {
-    if let Some(e) = overflowed(n, lim, matches!(f.model, Model::BeadSpring(_))) {
+    if let Some(e) = overflowed(n, lim, cfg) {
         return e;
     }
     // omega^2 is linear in (k_s, k_b), so both scaled by this factor fit.
@@ -238,7 +266,7 @@ fn too_large_for_the_beam(
     lim: &StabilityLimit,
 ) -> String {
     let h = scene.dt / cfg.substeps as f64;
-    if let Some(e) = overflowed(n, lim, matches!(cfg.model, ModelKind::BeadSpring)) {
+    if let Some(e) = overflowed(n, lim, cfg) {
         return e;
     }
     let h_ok = lim.step_limit * SAFETY;
