@@ -127,7 +127,7 @@ pub fn profile_moment(radius: f64, xi: f64, cutoff: f64, dims: usize) -> f64 {
 }
 
 /// Bead radius, in interface widths `xi`, below which configure notes that the profile no
-/// longer describes a solid bead: at `r_b = 2 xi` the profile reaches only 0.92 at the
+/// longer describes a solid bead: at `r_b = 2 xi` the profile reaches only 0.944 at the
 /// centre. The validated resolutions have `r_b >= 3 xi` (L2020's capillary scenes: 6 and 2).
 pub const SMALL_BEAD_OVER_XI: f64 = 2.0;
 
