@@ -12,32 +12,41 @@
 //! with the first reading (7.98) and not with the second (13.1), so [`chain_period_gamma`] is
 //! the first; [`chain_period_gamma_table`] reproduces REFERENCE.md's numbers for comparison.
 
+/// gamma T of a full Jeffery period (a turn by 2 pi) of an ellipse of aspect ratio `e`
+/// (L2020 eq. B.1).
+fn ellipse_period_gamma(e: f64) -> f64 {
+    2.0 * std::f64::consts::PI * (e + 1.0 / e)
+}
+
 /// Aspect ratio of the ellipse equivalent to a chain of `beads` touching beads (a cylinder
 /// of aspect ratio N_b): Harris & Pittman, `e = 1.14 N_b^0.844`.
 pub fn chain_equivalent_aspect_ratio(beads: usize) -> f64 {
-    1.14 * (beads as f64).powf(0.844)
+    cylinder_equivalent_aspect_ratio(beads as f64)
+}
+
+/// Harris & Pittman's equivalent ellipse of a cylinder of aspect ratio `aspect`,
+/// `e = 1.14 aspect^0.844`.
+fn cylinder_equivalent_aspect_ratio(aspect: f64) -> f64 {
+    1.14 * aspect.powf(0.844)
 }
 
 /// gamma T of a full Jeffery period for a cylinder of aspect ratio `aspect` (length over
 /// width), with Harris & Pittman's equivalent ellipse `e = 1.14 aspect^0.844`: for a chain of
 /// beads spaced apart, the cylinder that envelops it.
 pub fn cylinder_period_gamma(aspect: f64) -> f64 {
-    let e = 1.14 * aspect.powf(0.844);
-    2.0 * std::f64::consts::PI * (e + 1.0 / e)
+    ellipse_period_gamma(cylinder_equivalent_aspect_ratio(aspect))
 }
 
 /// gamma T of a full Jeffery period (a turn by 2 pi) for a chain of `beads` beads, with the
 /// equivalent ellipse of [`chain_equivalent_aspect_ratio`].
 pub fn chain_period_gamma(beads: usize) -> f64 {
-    let e = chain_equivalent_aspect_ratio(beads);
-    2.0 * std::f64::consts::PI * (e + 1.0 / e)
+    ellipse_period_gamma(chain_equivalent_aspect_ratio(beads))
 }
 
 /// REFERENCE.md section 2's gamma T: the same law solved for the ellipse,
 /// `e = (N_b / 1.14)^(1/0.844)` (see the module documentation for why it is not used).
 pub fn chain_period_gamma_table(beads: usize) -> f64 {
-    let e = (beads as f64 / 1.14).powf(1.0 / 0.844);
-    2.0 * std::f64::consts::PI * (e + 1.0 / e)
+    ellipse_period_gamma((beads as f64 / 1.14).powf(1.0 / 0.844))
 }
 
 #[cfg(test)]
