@@ -149,8 +149,9 @@ pub struct Context<'a> {
     /// Impulses of the last step (fluid scenes).
     pub impulses: &'a [cosim::BeadImpulse],
     pub trajectory: &'a crate::trajectory::Trajectory,
-    /// Time at the last step (scene time units).
-    pub time: f64,
+    /// How much what each steady metric reads changed over the run's last fifth
+    /// ([`crate::steady_watch`]), by metric.
+    pub steady: &'a BTreeMap<String, crate::steady_watch::Change>,
 }
 
 /// The value named `key` in a list of named values (diagnostics, derived quantities).
@@ -418,32 +419,25 @@ pub fn compute(
         if ORBIT_METRICS.contains(&name.as_str()) {
             continue;
         }
-        let m = match name.as_str() {
+        let mut m = match name.as_str() {
             // Already an error relative to the wall-speed difference: its reference is 0, so
             // that studies plot it against wall time like any other error.
-            "couette_max_error" => {
-                let mut m = Metric::with_reference(
-                    lookup(ctx.diagnostics, "couette_max_error").ok_or(
-                        "metric `couette_max_error` needs walls and a fluid that reports it",
-                    )?,
-                    0.0,
-                    "the exact Couette profile (linear; S2023 eq. 13 with solid layers), error \
+            "couette_max_error" => Metric::with_reference(
+                lookup(ctx.diagnostics, "couette_max_error")
+                    .ok_or("metric `couette_max_error` needs walls and a fluid that reports it")?,
+                0.0,
+                "the exact Couette profile (linear; S2023 eq. 13 with solid layers), error \
                      over the wall-speed difference",
-                );
-                steadiness(&mut m, name, ctx);
-                m
-            }
+            ),
             "drag_ratio" => drag_ratio(ctx)?,
             "drag_coefficient" => drag_coefficient(ctx)?,
             "surface_tension" | "contact_angle_deg" | "laplace_pressure_jump" => {
-                let mut m = crate::capillary_metrics::capillary_metric(
+                crate::capillary_metrics::capillary_metric(
                     name,
                     ctx.diagnostics,
                     ctx.derived,
                     ctx.scene.dimensions.into(),
-                )?;
-                steadiness(&mut m, name, ctx);
-                m
+                )?
             }
             n if crate::interface_metrics::INTERFACE_METRICS.contains(&n) => {
                 crate::interface_metrics::interface_metric(n, ctx)?
@@ -472,6 +466,9 @@ pub fn compute(
                 continue;
             }
         };
+        if let Some(c) = ctx.steady.get(name) {
+            steadiness(&mut m, c);
+        }
         out.insert(name.clone(), m);
     }
     out.extend(beam_metrics(&beam_names, ctx, dimensionless)?);
@@ -715,7 +712,6 @@ fn drag_coefficient(ctx: &Context) -> Result<Metric, String> {
     if let Some(b) = lookup(ctx.derived, "fluid.stream.blockage") {
         m.extra.insert("blockage".into(), b);
     }
-    steadiness(&mut m, "drag_coefficient", ctx);
     Ok(m)
 }
 
@@ -761,25 +757,21 @@ fn drag_ratio(ctx: &Context) -> Result<Metric, String> {
     m.extra.insert("solid_fraction".into(), c);
     m.extra.insert("drag_force".into(), force);
     m.extra.insert("mean_velocity".into(), u);
-    steadiness(&mut m, "drag_ratio", ctx);
     Ok(m)
 }
 
-/// A steady metric's change over the run's last fifth ([`crate::steady_watch`]), as an extra
-/// value, and in its note where the flow is not steady.
-fn steadiness(m: &mut Metric, name: &str, ctx: &Context) {
-    let end = crate::steady_watch::quantity(name, ctx.diagnostics);
-    if let Some(c) = ctx.trajectory.steady.change(name, ctx.time, end) {
-        m.extra
-            .insert(crate::steady_watch::CHANGE_EXTRA.into(), c.amount);
-        if c.exceeds() {
-            let not_steady = format!("not steady: {} change over the run's last fifth", c.words());
-            m.note = if m.note.is_empty() {
-                not_steady
-            } else {
-                format!("{}; {not_steady}", m.note)
-            };
-        }
+/// A steady metric's change `c` over the run's last fifth ([`crate::steady_watch`]), as an
+/// extra value, and in its note where the state is not steady.
+fn steadiness(m: &mut Metric, c: &crate::steady_watch::Change) {
+    m.extra
+        .insert(crate::steady_watch::CHANGE_EXTRA.into(), c.amount);
+    if c.exceeds() {
+        let not_steady = format!("not steady: {} change over the run's last fifth", c.words());
+        m.note = if m.note.is_empty() {
+            not_steady
+        } else {
+            format!("{}; {not_steady}", m.note)
+        };
     }
 }
 

@@ -1024,6 +1024,7 @@ fn conclude(
             .read_impulses(Port::BeadImpulses, &mut impulses)
             .map_err(|e| fail(format!("reading the final impulses: {e}")))?;
     }
+    let steady = trajectory.steady.changes(st.time, &st.last_diagnostics);
     let ctx = crate::metrics::Context {
         scene: &scene.scene,
         beads_per_fibre: beads,
@@ -1033,17 +1034,14 @@ fn conclude(
         diagnostics: &st.last_diagnostics,
         impulses: &impulses,
         trajectory,
-        time: st.time,
+        steady: &steady,
     };
     (st.metrics, st.metric_errors) =
         crate::metrics::compute_each(&scene.scene.analysis.metrics, &ctx, &mut st.dimensionless);
     st.steady_warnings = crate::steady_watch::STEADY_METRICS
         .iter()
         .filter(|m| st.metrics.contains_key(**m))
-        .filter_map(|m| {
-            let end = crate::steady_watch::quantity(m, &st.last_diagnostics);
-            trajectory.steady.change(m, st.time, end)?.warning(m)
-        })
+        .filter_map(|m| steady.get(*m)?.warning(m))
         .collect();
     // The orbit the metrics rest on, as files: needs the trajectory and a wall shear.
     let gamma = crate::metrics::lookup(&st.configured.derived, "fluid.shear_rate").map(f64::abs);

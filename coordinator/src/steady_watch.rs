@@ -178,6 +178,22 @@ impl SteadyHistory {
         }
     }
 
+    /// The change of every metric of the history, at the end of a run at `end_time` with the
+    /// last step's `diagnostics` ([`Self::change`]); a metric too short to say is left out.
+    pub fn changes(
+        &self,
+        end_time: f64,
+        diagnostics: &[(String, f64)],
+    ) -> BTreeMap<String, Change> {
+        self.samples
+            .keys()
+            .filter_map(|m| {
+                let c = self.change(m, end_time, quantity(m, diagnostics))?;
+                Some((m.clone(), c))
+            })
+            .collect()
+    }
+
     /// The change of `metric`'s quantity from the last sample at or before
     /// `(1 - LAST_PART) end_time` to its value `end` at `end_time`; `None` without such a
     /// sample (a run too short to say) or without a value at the end.
