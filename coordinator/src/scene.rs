@@ -58,12 +58,7 @@ fn default_dimensions() -> u8 {
 /// `dimensions`, read as any whole number so that 300 or -1 is told "expected 2 or 3" (read as
 /// a byte, 300 would be told "expected a whole number (0 to 255)").
 fn two_or_three<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u8, D::Error> {
-    match i64::deserialize(d)? {
-        n @ (2 | 3) => Ok(n as u8),
-        n => Err(serde::de::Error::custom(format!(
-            "expected 2 or 3, got {n}"
-        ))),
-    }
+    cosim::scene_keys::two_or_three(i64::deserialize(d)?).map_err(serde::de::Error::custom)
 }
 
 #[derive(Debug, Clone, Deserialize)]

@@ -342,12 +342,20 @@ pub fn parse_table(scene_toml: &str) -> Result<toml::Table, String> {
         .map_err(|e: toml::de::Error| format!("the scene is not valid TOML: {e}"))
 }
 
+/// A whole number of dimensions: 2 or 3, else what was expected (the coordinator and the
+/// nodes word it alike).
+pub fn two_or_three(n: i64) -> Result<u8, String> {
+    match n {
+        2 | 3 => Ok(n as u8),
+        _ => Err(format!("expected 2 or 3, got {n}")),
+    }
+}
+
 /// The top-level `dimensions` every node reads: 2 or 3, default 3.
 pub fn dimensions(table: &toml::Table) -> Result<u8, String> {
     match table.get("dimensions") {
         None => Ok(3),
-        Some(toml::Value::Integer(2)) => Ok(2),
-        Some(toml::Value::Integer(3)) => Ok(3),
+        Some(toml::Value::Integer(n)) => two_or_three(*n).map_err(|e| format!("dimensions: {e}")),
         Some(v) => Err(format!(
             "dimensions: expected 2 or 3, got {}",
             describe_value(v)
