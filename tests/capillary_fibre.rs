@@ -14,6 +14,16 @@ fn diagnostic(summary: &serde_json::Value, key: &str) -> f64 {
         .unwrap_or_else(|| panic!("final diagnostic `{key}` missing: {summary}"))
 }
 
+/// Whether the summary warns that `metric` was read from a state still changing.
+fn warns_not_steady(summary: &serde_json::Value, metric: &str) -> bool {
+    summary["warnings"].as_array().is_some_and(|w| {
+        w.iter().any(|w| {
+            w.as_str()
+                .is_some_and(|w| w.contains(&format!("`{metric}`")) && w.contains("not yet steady"))
+        })
+    })
+}
+
 /// Every final diagnostic is a finite number (no NaN or blow-up anywhere in the run: the
 /// coordinator stops a run whose diagnostics go non-finite, and the status says so).
 fn assert_bounded(summary: &serde_json::Value) {
@@ -60,6 +70,15 @@ fn tilted_fibre_aligns_with_a_flat_interface() {
     );
     assert!((initial - 50.0).abs() < 1e-5, "initial tilt {initial}");
     assert!(value < 5.0, "final tilt {value} deg: {tilt}");
+    // Still turning at the end: the tilt fell by 2.4 deg over the last fifth (from 3.9 deg),
+    // past the 0.5 deg a steady state allows, and the summary says so
+    // (coordinator/src/steady_watch.rs).
+    let change = tilt["extra"]["change_over_last_fifth"].as_f64().unwrap();
+    assert!(
+        change > 0.5 && change < initial,
+        "tilt change {change} deg: {tilt}"
+    );
+    assert!(warns_not_steady(&s, "final_tilt_deg"), "{}", s["warnings"]);
     let mean = diagnostic(&s, "mean_psi");
     assert!(mean.abs() < 1e-12, "mean psi drifted to {mean}");
 }
@@ -103,6 +122,13 @@ fn full_encapsulation_stays_bounded_and_conserves_psi() {
     assert!((m1 - m0).abs() <= 1e-12 * m0.abs(), "mean psi {m0} -> {m1}");
     let wrap = &s["metrics"]["wrap"];
     assert_eq!(wrap["label"], "full", "{wrap}");
+    // Full, but the ends still close: w grew by 4.9 % over the last fifth, and the summary
+    // says that the wrap is not yet steady; R_c had settled to 0.95 %.
+    assert!(warns_not_steady(&s, "wrap"), "{}", s["warnings"]);
+    assert!(!warns_not_steady(
+        &s,
+        "curvature_radius_over_droplet_radius"
+    ));
     let ratio = &s["metrics"]["curvature_radius_over_droplet_radius"];
     let r = ratio["value"].as_f64().unwrap();
     // L2020 section 3.5: upon encapsulation R_c is "very close to the droplet radius"

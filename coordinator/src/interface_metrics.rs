@@ -22,6 +22,7 @@
 use crate::metrics::{
     chord_sag, cross, dot, fibre0_bead_radius, lookup, norm, number, plain, sub, Context, Metric,
 };
+use crate::scene::Scene;
 use std::f64::consts::PI;
 
 /// Metric names this module computes.
@@ -279,10 +280,9 @@ pub fn classify_wrap(points: &[P], r_b: f64, normal: P) -> (f64, &'static str) {
 
 /// The unit normal of the flat initial interface of the scene's `[fluid.binary]`
 /// (`normal`: an axis index or an axis-aligned vector; default the last axis).
-fn interface_normal(ctx: &Context) -> Result<P, String> {
-    let dims = ctx.scene.dimensions as usize;
-    let binary = ctx
-        .scene
+fn interface_normal(scene: &Scene) -> Result<P, String> {
+    let dims = scene.dimensions as usize;
+    let binary = scene
         .fluid
         .as_ref()
         .and_then(|f| f.get("binary"))
@@ -310,6 +310,84 @@ fn interface_normal(ctx: &Context) -> Result<P, String> {
     Ok(n)
 }
 
+/// What the interface metrics read besides fibre 0's bead centres, taken once from the
+/// scene and the derived quantities, so that a metric's value can be worked out from the
+/// bead centres of any step: the last for the metric, earlier ones for its steadiness
+/// ([`crate::steady_watch`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct InterfaceGeometry {
+    dimensions: u8,
+    /// The flat initial interface's normal, or why there is none.
+    normal: Result<P, String>,
+    bead_radius: Option<f64>,
+    /// R_droplet of the initial droplet (L2020 eq. 45).
+    droplet_radius: Option<f64>,
+}
+
+impl InterfaceGeometry {
+    pub fn of(scene: &Scene, derived: &[(String, f64)]) -> Self {
+        Self {
+            dimensions: scene.dimensions,
+            normal: interface_normal(scene),
+            bead_radius: number(scene.fibre.first().and_then(|f| f.get("bead_radius"))),
+            droplet_radius: lookup(derived, "fluid.binary.initial_droplet_radius"),
+        }
+    }
+
+    /// The normal of the plane the fibre bends in: z in a 2D scene, else the best-fit plane
+    /// of its bead centres.
+    fn bend_normal(&self, points: &[P]) -> P {
+        if self.dimensions == 2 {
+            return [0.0, 0.0, 1.0];
+        }
+        best_fit_normal(points)
+    }
+
+    /// The circle fitted to the `FIT_BEADS` middle bead centres of `points`: (first fitted
+    /// bead, circle; None for collinear centres).
+    fn middle_circle(&self, points: &[P]) -> Result<(usize, Option<Circle>), String> {
+        let first = middle_window(points.len()).ok_or_else(|| {
+            format!(
+                "metric `curvature_radius_over_droplet_radius` needs a fibre of at least \
+                 {FIT_BEADS} beads"
+            )
+        })?;
+        let normal = (self.dimensions == 2).then_some([0.0, 0.0, 1.0]);
+        Ok((first, fit_circle(&points[first..first + FIT_BEADS], normal)))
+    }
+
+    fn droplet_radius(&self) -> Result<f64, String> {
+        self.droplet_radius.ok_or_else(|| {
+            "metric `curvature_radius_over_droplet_radius` needs an initial droplet \
+             (derived `fluid.binary.initial_droplet_radius`, L2020 eq. 45)"
+                .into()
+        })
+    }
+
+    /// The value of interface metric `name` for fibre 0's bead centres `points` (at least
+    /// two).
+    pub fn value(&self, name: &str, points: &[P]) -> Result<f64, String> {
+        let (first, last) = (points[0], points[points.len() - 1]);
+        match name {
+            "final_tilt_deg" => Ok(tilt_deg(first, last, self.normal.clone()?)),
+            "wrap" => {
+                let r_b = self
+                    .bead_radius
+                    .ok_or("metric `wrap` needs fibre.0.bead_radius")?;
+                Ok(classify_wrap(points, r_b, self.bend_normal(points)).0)
+            }
+            "curvature_radius_over_droplet_radius" => {
+                let r_c = self
+                    .middle_circle(points)?
+                    .1
+                    .map_or(f64::INFINITY, |c| c.radius);
+                Ok(r_c / self.droplet_radius()?)
+            }
+            other => Err(format!("`{other}` is not an interface metric")),
+        }
+    }
+}
+
 /// Fibre 0's final bead centres, and its bead radius.
 fn fibre_zero(ctx: &Context, name: &str) -> Result<(Vec<P>, f64), String> {
     let n = *ctx
@@ -324,15 +402,6 @@ fn fibre_zero(ctx: &Context, name: &str) -> Result<(Vec<P>, f64), String> {
     let r_b = fibre0_bead_radius(ctx)
         .ok_or_else(|| format!("metric `{name}` needs fibre.0.bead_radius"))?;
     Ok((ctx.last[..n].iter().map(|s| s.position).collect(), r_b))
-}
-
-/// The normal of the plane the fibre bends in: z in a 2D scene, else the best-fit plane of
-/// its bead centres.
-fn bend_normal(ctx: &Context, points: &[P]) -> P {
-    if ctx.scene.dimensions == 2 {
-        return [0.0, 0.0, 1.0];
-    }
-    best_fit_normal(points)
 }
 
 /// The mean of `points`.
@@ -367,10 +436,11 @@ fn best_fit_normal(points: &[P]) -> P {
 pub fn interface_metric(name: &str, ctx: &Context) -> Result<Metric, String> {
     let (points, r_b) = fibre_zero(ctx, name)?;
     let (first, last) = (points[0], points[points.len() - 1]);
+    let geometry = InterfaceGeometry::of(ctx.scene, ctx.derived);
+    let mut m = plain(geometry.value(name, &points)?);
     match name {
         "final_tilt_deg" => {
-            let normal = interface_normal(ctx)?;
-            let mut m = plain(tilt_deg(first, last, normal));
+            let normal = geometry.normal.clone()?;
             let n0 = ctx.initial.len().min(points.len());
             if n0 >= 2 {
                 m.extra.insert(
@@ -417,9 +487,8 @@ pub fn interface_metric(name: &str, ctx: &Context) -> Result<Metric, String> {
             Ok(m)
         }
         "wrap" => {
-            let normal = bend_normal(ctx, &points);
-            let (w, label) = classify_wrap(&points, r_b, normal);
-            let mut m = plain(w);
+            let normal = geometry.bend_normal(&points);
+            let label = classify_wrap(&points, r_b, normal).1;
             m.label = Some(label.to_string());
             let ends = norm(sub(last, first));
             let contour: f64 = points.windows(2).map(|p| norm(sub(p[1], p[0]))).sum();
@@ -441,20 +510,9 @@ pub fn interface_metric(name: &str, ctx: &Context) -> Result<Metric, String> {
             Ok(m)
         }
         "curvature_radius_over_droplet_radius" => {
-            let first_bead = middle_window(points.len()).ok_or_else(|| {
-                format!("metric `{name}` needs a fibre of at least {FIT_BEADS} beads")
-            })?;
-            let window = &points[first_bead..first_bead + FIT_BEADS];
-            let normal = (ctx.scene.dimensions == 2).then_some([0.0, 0.0, 1.0]);
-            let r_d = lookup(ctx.derived, "fluid.binary.initial_droplet_radius").ok_or(
-                "metric `curvature_radius_over_droplet_radius` needs an initial droplet \
-                 (derived `fluid.binary.initial_droplet_radius`, L2020 eq. 45)",
-            )?;
-            let (r_c, rms) = match fit_circle(window, normal) {
-                Some(c) => (c.radius, c.rms_residual),
-                None => (f64::INFINITY, 0.0),
-            };
-            let mut m = plain(r_c / r_d);
+            let (first_bead, circle) = geometry.middle_circle(&points)?;
+            let r_d = geometry.droplet_radius()?;
+            let (r_c, rms) = circle.map_or((f64::INFINITY, 0.0), |c| (c.radius, c.rms_residual));
             m.extra.insert("curvature_radius".into(), r_c);
             m.extra.insert("droplet_radius".into(), r_d);
             m.extra.insert("fit_rms_residual".into(), rms);

@@ -669,6 +669,9 @@ fn drive(
         trajectory.steady =
             crate::steady_watch::SteadyHistory::for_metrics(&scene.scene.analysis.metrics);
     }
+    trajectory.steady = std::mem::take(&mut trajectory.steady).with_geometry(
+        crate::interface_metrics::InterfaceGeometry::of(&scene.scene, &st.configured.derived),
+    );
 
     let interval = scene.output_interval();
     let load_scale = largest_load(scene);
@@ -776,28 +779,32 @@ fn drive(
         // With the next step's batch out, Ctrl-C ends the run after that step; after a brief
         // report, after the next, which reports in full.
         let stop = INTERRUPTED.load(Ordering::SeqCst) && !next_sent && in_full;
+        let last = step + 1 == steps || at_rest || stop;
+        let log_due = (step + 1) % interval == 0 || last;
+        let sample = (step + 1, steps, log_due);
+        let snapshot_due = snapshots.as_ref().is_some_and(|s| s.due(step + 1, last));
+        let states_due = has_beads
+            && (track || log_due || snapshot_due || trajectory.steady.reads_beads_at(sample));
         // By step: with the next batches out, the fibre node may have published step n + 2's.
-        if track {
+        if states_due {
             exchange
                 .read_states_of_step(Port::BeadStates, step + 1, &mut states)
                 .map_err(|e| fail(format!("reading bead states at step {}: {e}", step + 1)))?;
+        }
+        if track {
             trajectory.push(st.time, &states, beads[0]);
             if (step + 1) % shape_every == 0 {
                 trajectory.push_shape(st.time, &states, beads[0]);
             }
         }
-        let last = step + 1 == steps || at_rest || stop;
-        let log_due = (step + 1) % interval == 0 || last;
-        let sample = (step + 1, steps, log_due);
+        let fibre0 = if states_due {
+            fibre_zero(&states, &beads)
+        } else {
+            &[]
+        };
         trajectory
             .steady
-            .observe(sample, st.time, &st.last_diagnostics);
-        let snapshot_due = snapshots.as_ref().is_some_and(|s| s.due(step + 1, last));
-        if has_beads && (log_due || snapshot_due) {
-            exchange
-                .read_states_of_step(Port::BeadStates, step + 1, &mut states)
-                .map_err(|e| fail(format!("reading bead states at step {}: {e}", step + 1)))?;
-        }
+            .observe(sample, st.time, &st.last_diagnostics, fibre0);
         if log_due {
             let logged_states = has_beads.then_some((&beads[..], &radii[..], &states[..]));
             log_step(log, step + 1, logged_states, st)?;
@@ -994,6 +1001,11 @@ struct RunEnd<'a> {
     beads: &'a [usize],
 }
 
+/// Fibre 0's states among `states` (fibres in order, `beads` each); empty without fibres.
+fn fibre_zero<'a>(states: &'a [cosim::BeadState], beads: &[usize]) -> &'a [cosim::BeadState] {
+    &states[..beads.first().map_or(0, |&n| n.min(states.len()))]
+}
+
 /// After the last step: the final bead states (and SPM impulses), the metrics, and the orbit
 /// files where a metric followed the trajectory in a wall shear.
 fn conclude(
@@ -1024,7 +1036,10 @@ fn conclude(
             .read_impulses(Port::BeadImpulses, &mut impulses)
             .map_err(|e| fail(format!("reading the final impulses: {e}")))?;
     }
-    let steady = trajectory.steady.changes(st.time, &st.last_diagnostics);
+    let steady =
+        trajectory
+            .steady
+            .changes(st.time, &st.last_diagnostics, fibre_zero(&states, beads));
     let ctx = crate::metrics::Context {
         scene: &scene.scene,
         beads_per_fibre: beads,

@@ -4,10 +4,12 @@
 //! drag of a held body (`drag_ratio`, `drag_coefficient`: the periodic array's drag, Dennis &
 //! Chang's C_D), the Couette profile between walls (`couette_max_error`) and the equilibria
 //! of a binary fluid (`surface_tension`, `laplace_pressure_jump`, `contact_angle_deg`: L2020
-//! section 3.3). A run that ends while
-//! the state still changes compares a transient, and nothing in the value says so. The
-//! history keeps, at about [`SAMPLES`] evenly spaced steps and at every logged step, the
-//! quantity each of these metrics reads, and the metric reports the quantity's change over
+//! section 3.3); others read the shape a fibre relaxes to at an interface (`final_tilt_deg`,
+//! `wrap`, `curvature_radius_over_droplet_radius`: L2020 sections 3.4-3.5, worked out from
+//! fibre 0's bead centres by [`crate::interface_metrics::InterfaceGeometry`]). A run that
+//! ends while the state still changes compares a transient, and nothing in the value says
+//! so. The history keeps, at about [`SAMPLES`] evenly spaced steps and at every logged step,
+//! the quantity each of these metrics reads, and the metric reports the quantity's change over
 //! the run's last fifth ([`LAST_PART`]); past [`STEADY_CHANGE`] (relative; for an angle
 //! [`STEADY_DEGREES`], for the Couette error, already a fraction of the wall speeds,
 //! [`STEADY_ERROR`]) the summary warns.
@@ -16,20 +18,27 @@
 //! its holding force by 0.06 % over the last fifth of its 12 800 steps (2 % between steps
 //! 1600 and 2400); configs/capillary/contact_angle.toml, a smoke run of 8000 steps whose bead
 //! is still sinking, moves its angle by 0.68 deg over its last fifth, and by about 0.3 deg
-//! over the last fifth of the 128 000 steps its comment suggests.
+//! over the last fifth of the 128 000 steps its comment suggests. configs/capillary/
+//! encapsulation_2d.toml as written (L2020's eta = 10, 40 000 steps) ends with the fibre
+//! still bending around its droplet.
 
+use crate::interface_metrics::{InterfaceGeometry, INTERFACE_METRICS};
 use crate::metrics::lookup;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-/// The metrics that compare the last step with the reference of a steady state.
-pub const STEADY_METRICS: [&str; 6] = [
+/// The metrics that compare the last step with the reference of a steady state, or read
+/// the state a relaxation ends in.
+pub const STEADY_METRICS: [&str; 9] = [
     "drag_ratio",
     "drag_coefficient",
     "couette_max_error",
     "surface_tension",
     "laplace_pressure_jump",
     "contact_angle_deg",
+    "final_tilt_deg",
+    "wrap",
+    "curvature_radius_over_droplet_radius",
 ];
 
 /// About this many samples over a run (one every `steps / SAMPLES` steps), besides the
@@ -54,8 +63,9 @@ pub const STEADY_ERROR: f64 = 1e-3;
 pub const CHANGE_EXTRA: &str = "change_over_last_fifth";
 
 /// What a steady metric reads at one step, from the step's diagnostics, up to constant
-/// factors; `None` for other metrics, or where a diagnostic is missing (those that cost a
-/// pass of their own are reported at logged steps only).
+/// factors; `None` for other metrics (the interface metrics read the bead centres:
+/// [`SteadyHistory::observe`]), or where a diagnostic is missing (those that cost a pass of
+/// their own are reported at logged steps only).
 pub fn quantity(metric: &str, diagnostics: &[(String, f64)]) -> Option<f64> {
     let d = |k: &str| lookup(diagnostics, k);
     match metric {
@@ -130,9 +140,9 @@ impl Change {
     pub fn warning(&self, metric: &str) -> Option<String> {
         self.exceeds().then(|| {
             format!(
-                "metric `{metric}` compares the last step with the reference of a steady state, \
-                 but what it reads changed by {} over the run's last fifth (time {} to {}): \
-                 the run is not yet steady; raise time.steps",
+                "metric `{metric}` reads a steady state at the last step, but what it reads \
+                 changed by {} over the run's last fifth (time {} to {}): the run is not yet \
+                 steady; raise time.steps",
                 self.words(),
                 cosim::scene_keys::Sig(self.from_time),
                 cosim::scene_keys::Sig(self.end_time)
@@ -145,6 +155,20 @@ impl Change {
 #[derive(Debug, Default, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SteadyHistory {
     pub samples: BTreeMap<String, Vec<(f64, f64)>>,
+    /// What the interface metrics read besides the bead centres; set by the run
+    /// ([`Self::with_geometry`]), at a resume too.
+    #[serde(skip)]
+    geometry: Option<InterfaceGeometry>,
+}
+
+/// Whether `metric` is read from fibre 0's bead centres rather than from the diagnostics.
+fn reads_beads(metric: &str) -> bool {
+    INTERFACE_METRICS.contains(&metric)
+}
+
+/// Bead centres of `fibre0` (fibre 0's states), or `None` with fewer than two.
+fn centres(fibre0: &[cosim::BeadState]) -> Option<Vec<[f64; 3]>> {
+    (fibre0.len() >= 2).then(|| fibre0.iter().map(|s| s.position).collect())
 }
 
 impl SteadyHistory {
@@ -155,41 +179,79 @@ impl SteadyHistory {
             .filter(|m| STEADY_METRICS.contains(&m.as_str()))
             .map(|m| (m.clone(), Vec::new()))
             .collect();
-        Self { samples }
+        Self {
+            samples,
+            geometry: None,
+        }
     }
 
-    /// Take step `step` (1-based) of a run of `steps` steps, at `time`: every
-    /// `steps / SAMPLES` steps and at the `logged` steps (the last step's value the metric
-    /// reads itself).
+    /// The same history, with what its interface metrics read besides the bead centres.
+    pub fn with_geometry(self, geometry: InterfaceGeometry) -> Self {
+        Self {
+            geometry: Some(geometry),
+            ..self
+        }
+    }
+
+    /// Whether step `step` (1-based) of a run of `steps` steps is sampled: every
+    /// `steps / SAMPLES` steps and the `logged` steps.
+    fn due((step, steps, logged): (u64, u64, bool)) -> bool {
+        logged || step.is_multiple_of((steps / SAMPLES).max(1))
+    }
+
+    /// Whether [`Self::observe`] needs fibre 0's bead states at this step.
+    pub fn reads_beads_at(&self, sample: (u64, u64, bool)) -> bool {
+        Self::due(sample) && self.samples.keys().any(|m| reads_beads(m))
+    }
+
+    /// Take step `step` (1-based) of a run of `steps` steps, at `time`, where it is due
+    /// (every `steps / SAMPLES` steps and the `logged` steps), from the step's diagnostics
+    /// and fibre 0's bead states `fibre0` (needed where [`Self::reads_beads_at`] says so).
     pub fn observe(
         &mut self,
-        (step, steps, logged): (u64, u64, bool),
+        sample: (u64, u64, bool),
         time: f64,
         diagnostics: &[(String, f64)],
+        fibre0: &[cosim::BeadState],
     ) {
-        let stride = (steps / SAMPLES).max(1);
-        if !step.is_multiple_of(stride) && !logged {
+        if !Self::due(sample) {
             return;
         }
+        let points = centres(fibre0);
         for (metric, list) in &mut self.samples {
-            if let Some(q) = quantity(metric, diagnostics).filter(|q| q.is_finite()) {
+            let q = if reads_beads(metric) {
+                match (&self.geometry, &points) {
+                    (Some(g), Some(p)) => g.value(metric, p).ok(),
+                    _ => None,
+                }
+            } else {
+                quantity(metric, diagnostics)
+            };
+            if let Some(q) = q.filter(|q| q.is_finite()) {
                 list.push((time, q));
             }
         }
     }
 
     /// The change of every metric of the history, at the end of a run at `end_time` with the
-    /// last step's `diagnostics` ([`Self::change`]); a metric too short to say is left out.
+    /// last step's `diagnostics` and fibre 0's states `fibre0` ([`Self::change`]); a metric
+    /// too short to say is left out.
     pub fn changes(
         &self,
         end_time: f64,
         diagnostics: &[(String, f64)],
+        fibre0: &[cosim::BeadState],
     ) -> BTreeMap<String, Change> {
+        let points = centres(fibre0);
         self.samples
             .keys()
             .filter_map(|m| {
-                let c = self.change(m, end_time, quantity(m, diagnostics))?;
-                Some((m.clone(), c))
+                let end = if reads_beads(m) {
+                    self.geometry.as_ref()?.value(m, points.as_ref()?).ok()
+                } else {
+                    quantity(m, diagnostics)
+                };
+                Some((m.clone(), self.change(m, end_time, end)?))
             })
             .collect()
     }
@@ -242,7 +304,7 @@ mod tests {
             assert_eq!(h.samples.len(), 1);
             for step in 1..=steps {
                 let t = step as f64;
-                h.observe((step, steps, false), t, &diag(force(t)));
+                h.observe((step, steps, false), t, &diag(force(t)), &[]);
             }
             let end = steps as f64;
             let c = h.change("drag_coefficient", end, Some(force(end))).unwrap();
@@ -266,6 +328,7 @@ mod tests {
                 (step, 1000, logged),
                 step as f64,
                 &d(90.0 - 0.004 * step as f64),
+                &[],
             );
         }
         let c = h.change("contact_angle_deg", 1000.0, Some(86.0)).unwrap();
@@ -279,9 +342,51 @@ mod tests {
         // A diagnostic of logged steps only: sampled at those, off the stride.
         let mut h = SteadyHistory::for_metrics(&["surface_tension".into()]);
         let e = vec![("free_energy".to_string(), 2.0)];
-        h.observe((333, 1000, true), 333.0, &e);
-        h.observe((334, 1000, false), 334.0, &[]);
+        h.observe((333, 1000, true), 333.0, &e, &[]);
+        h.observe((334, 1000, false), 334.0, &[], &[]);
         assert_eq!(h.samples["surface_tension"], vec![(333.0, 2.0)]);
+    }
+
+    /// An interface metric is read from fibre 0's bead centres at every sample, by the same
+    /// code as the metric (`InterfaceGeometry::value`): a two-bead fibre whose tilt to a flat
+    /// interface (normal y) relaxes as 10 e^{-t / tau} deg changes over the last fifth by
+    /// 10 (e^{-0.8 T / tau} - e^{-T / tau}) deg, to round-off; a run of 2 tau warns, one of
+    /// 20 tau does not. Without the geometry nothing is sampled.
+    #[test]
+    fn a_relaxing_tilt_is_read_from_the_bead_centres() {
+        let text = "dimensions = 2\n[time]\ndt = 1.0\nsteps = 1\n\
+                    [fluid.binary]\ninitial = \"flat\"\n\
+                    [[fibre]]\nbead_radius = 1.0\n";
+        let (scene, _, _) = crate::scene::from_text(text, "test", &[]).unwrap();
+        let geometry = InterfaceGeometry::of(&scene, &[]);
+        let tau = 100.0;
+        let tilt = |t: f64| 10.0 * (-t / tau).exp();
+        let beads = |t: f64| {
+            let a = tilt(t).to_radians();
+            [[0.0; 3], [a.cos(), a.sin(), 0.0]].map(|position| cosim::BeadState {
+                position,
+                ..Default::default()
+            })
+        };
+        for (steps, warns) in [(200_u64, true), (2000, false)] {
+            let metrics = ["final_tilt_deg".to_string()];
+            let mut h = SteadyHistory::for_metrics(&metrics).with_geometry(geometry.clone());
+            let mut bare = SteadyHistory::for_metrics(&metrics);
+            for step in 1..=steps {
+                let (t, sample) = (step as f64, (step, steps, step == steps));
+                assert_eq!(h.reads_beads_at(sample), bare.reads_beads_at(sample));
+                h.observe(sample, t, &[], &beads(t));
+                bare.observe(sample, t, &[], &beads(t));
+            }
+            let end = steps as f64;
+            let c = h.changes(end, &[], &beads(end))["final_tilt_deg"];
+            let exact = tilt(0.8 * end) - tilt(end);
+            assert!((c.amount - exact).abs() < 1e-9, "{c:?} {exact}");
+            assert_eq!(c.measure, Measure::Degrees);
+            assert_eq!(c.exceeds(), warns, "{c:?}");
+            assert!(bare.samples["final_tilt_deg"].is_empty());
+            assert!(bare.changes(end, &[], &beads(end)).is_empty());
+        }
     }
 
     #[test]
@@ -291,7 +396,7 @@ mod tests {
             ("total_impulse_x".to_string(), 2.0),
             ("mean_velocity_x".to_string(), 4.0),
         ];
-        h.observe((1, 1, false), 0.7, &d);
+        h.observe((1, 1, false), 0.7, &d, &[]);
         assert_eq!(h.samples["drag_ratio"], vec![(0.7, 0.5)]);
         assert_eq!(h.change("drag_ratio", 0.7, Some(0.5)), None);
         assert_eq!(h.change("drag_coefficient", 0.7, Some(0.5)), None);
