@@ -765,8 +765,12 @@ fn drag_ratio(ctx: &Context) -> Result<Metric, String> {
 fn steadiness(m: &mut Metric, c: &crate::steady_watch::Change) {
     m.extra
         .insert(crate::steady_watch::CHANGE_EXTRA.into(), c.amount);
-    if c.exceeds() {
-        let not_steady = format!("not steady: {} change over the run's last fifth", c.words());
+    if let Some(r) = c.remaining {
+        m.extra
+            .insert(crate::steady_watch::REMAINING_EXTRA.into(), r);
+    }
+    if let Some(why) = c.not_steady() {
+        let not_steady = format!("not steady: {why}");
         m.note = if m.note.is_empty() {
             not_steady
         } else {

@@ -10,9 +10,11 @@
 //! ends while the state still changes compares a transient, and nothing in the value says
 //! so. The history keeps, at about [`SAMPLES`] evenly spaced steps and at every logged step,
 //! the quantity each of these metrics reads, and the metric reports the quantity's change over
-//! the run's last fifth ([`LAST_PART`]); past [`STEADY_CHANGE`] (relative; for an angle
-//! [`STEADY_DEGREES`], for the Couette error, already a fraction of the wall speeds,
-//! [`STEADY_ERROR`]) the summary warns.
+//! the run's last fifth ([`LAST_PART`]) and, where that change slows down, how much further
+//! an exponential approach through three of its samples would go ([`exponential_remainder`]:
+//! a slow drift moves little over the last fifth but has far to go). Past [`STEADY_CHANGE`]
+//! (relative; for an angle [`STEADY_DEGREES`], for the Couette error, already a fraction of
+//! the wall speeds, [`STEADY_ERROR`]), either one, the summary warns.
 //!
 //! Measured on the shipped scenes: the FPD cylinder of configs/fpd/cylinder_drag.toml changes
 //! its holding force by 0.06 % over the last fifth of its 12 800 steps (2 % between steps
@@ -61,6 +63,10 @@ pub const STEADY_ERROR: f64 = 1e-3;
 /// Name of the metric's extra value that holds the change (relative; degrees for an angle;
 /// for the Couette error, its own change).
 pub const CHANGE_EXTRA: &str = "change_over_last_fifth";
+
+/// Name of the metric's extra value that holds the change still to come were the approach
+/// exponential ([`Change::remaining`]), in the change's measure.
+pub const REMAINING_EXTRA: &str = "estimated_remaining_change";
 
 /// What a steady metric reads at one step, from the step's diagnostics, up to constant
 /// factors; `None` for other metrics (the interface metrics read the bead centres:
@@ -114,40 +120,99 @@ pub struct Change {
     /// `(1 - LAST_PART) t_end`.
     pub from_time: f64,
     pub end_time: f64,
+    /// How much further the quantity would move, in the same measure, were its approach
+    /// exponential, q(t) = q_inf + A e^{-lambda t} through the samples at `from_time`,
+    /// half-way and the end ([`exponential_remainder`]); `None` where the last fifth does
+    /// not show such an approach (no change, a change of sign, or no slowing down).
+    pub remaining: Option<f64>,
+}
+
+/// The distance `|q_inf - q2|` still to go of q(t) = q_inf + A e^{-lambda t}, lambda > 0,
+/// through three samples `(t, q)` in time order; `None` where no such curve passes through
+/// them: the two differences of unlike sign or zero, or the later one not smaller, per unit
+/// time, than a straight line allows (d2 / d1 >= h2 / h1). With h = t1 - t0 = t2 - t1 this
+/// is Aitken's delta-squared: |d2| r / (1 - r), r = d2 / d1.
+pub fn exponential_remainder(samples: [(f64, f64); 3]) -> Option<f64> {
+    let [(t0, q0), (t1, q1), (t2, q2)] = samples;
+    let (h1, h2) = (t1 - t0, t2 - t1);
+    let (d1, d2) = (q1 - q0, q2 - q1);
+    let r = d2 / d1;
+    if !(h1 > 0.0 && h2 > 0.0 && r > 0.0 && r < h2 / h1) {
+        return None;
+    }
+    // d2 / d1 = e^{-lambda h1} (1 - e^{-lambda h2}) / (1 - e^{-lambda h1}) falls from
+    // h2 / h1 (lambda -> 0) to 0 (lambda -> inf): bisect on lambda h1 in log space.
+    let ratio = |x: f64| {
+        let y = x * h2 / h1;
+        (-x).exp() * (-(-y).exp_m1()) / (-(-x).exp_m1())
+    };
+    let (mut lo, mut hi) = (1e-12_f64.ln(), 700.0_f64.ln());
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if ratio(mid.exp()) > r {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let lambda_h2 = (0.5 * (lo + hi)).exp() * h2 / h1;
+    Some((d2 / lambda_h2.exp_m1()).abs())
 }
 
 impl Change {
-    /// Past [`STEADY_CHANGE`] ([`STEADY_DEGREES`] for an angle).
+    fn limit(&self) -> f64 {
+        match self.measure {
+            Measure::Relative => STEADY_CHANGE,
+            Measure::Degrees => STEADY_DEGREES,
+            Measure::Fraction => STEADY_ERROR,
+        }
+    }
+
+    /// The change over the last fifth, or the change still to come were the approach
+    /// exponential ([`Self::remaining`]: a slow drift), past [`STEADY_CHANGE`]
+    /// ([`STEADY_DEGREES`] for an angle, [`STEADY_ERROR`] for the Couette error).
     pub fn exceeds(&self) -> bool {
-        self.amount
-            > match self.measure {
-                Measure::Relative => STEADY_CHANGE,
-                Measure::Degrees => STEADY_DEGREES,
-                Measure::Fraction => STEADY_ERROR,
-            }
+        self.amount > self.limit() || self.remaining.is_some_and(|r| r > self.limit())
+    }
+
+    /// Why the state is not steady, in words, past the limit: "1.29 % change over the
+    /// run's last fifth" and, where the approach looks exponential, the change to come.
+    pub fn not_steady(&self) -> Option<String> {
+        if !self.exceeds() {
+            return None;
+        }
+        let mut words = format!("{} change over the run's last fifth", self.words());
+        if let Some(r) = self.remaining {
+            words += &format!(
+                " and, slowing as an exponential approach does, {} still to come",
+                self.in_words(r)
+            );
+        }
+        Some(words)
     }
 
     /// The change in words: "1.29 %", "0.69 deg", or "2.1e-3 of the wall speeds".
     pub fn words(&self) -> String {
+        self.in_words(self.amount)
+    }
+
+    fn in_words(&self, x: f64) -> String {
         match self.measure {
-            Measure::Relative => format!("{:.2} %", 100.0 * self.amount),
-            Measure::Degrees => format!("{:.2} deg", self.amount),
-            Measure::Fraction => format!("{:.1e} of the wall speeds", self.amount),
+            Measure::Relative => format!("{:.2} %", 100.0 * x),
+            Measure::Degrees => format!("{:.2} deg", x),
+            Measure::Fraction => format!("{:.1e} of the wall speeds", x),
         }
     }
 
     /// Past the limit: the summary's warning for `metric`.
     pub fn warning(&self, metric: &str) -> Option<String> {
-        self.exceeds().then(|| {
-            format!(
-                "metric `{metric}` reads a steady state at the last step, but what it reads \
-                 changed by {} over the run's last fifth (time {} to {}): the run is not yet \
-                 steady; raise time.steps",
-                self.words(),
-                cosim::scene_keys::Sig(self.from_time),
-                cosim::scene_keys::Sig(self.end_time)
-            )
-        })
+        let why = self.not_steady()?;
+        Some(format!(
+            "metric `{metric}` reads a steady state at the last step, but what it reads \
+             shows {why} (time {} to {}): the run is not yet steady; raise time.steps",
+            cosim::scene_keys::Sig(self.from_time),
+            cosim::scene_keys::Sig(self.end_time)
+        ))
     }
 }
 
@@ -270,16 +335,20 @@ impl SteadyHistory {
             .iter()
             .rev()
             .find(|(t, _)| *t <= cut && *t > 0.0)?;
-        let amount = if relative {
-            ((end - from) / end).abs()
-        } else {
-            (end - from).abs()
-        };
+        let scale = if relative { end.abs() } else { 1.0 };
+        let half = 0.5 * (from_time + end_time);
+        let remaining = self.samples[metric]
+            .iter()
+            .rev()
+            .find(|(t, _)| *t <= half && *t > from_time)
+            .and_then(|&mid| exponential_remainder([(from_time, from), mid, (end_time, end)]))
+            .map(|r| r / scale);
         Some(Change {
-            amount,
+            amount: (end - from).abs() / scale,
             measure,
             from_time,
             end_time,
+            remaining,
         })
     }
 }
@@ -312,7 +381,33 @@ mod tests {
             assert!((c.amount - exact).abs() < 1e-12, "{c:?} {exact}");
             assert_eq!(c.from_time, 0.8 * end);
             assert_eq!(c.warning("drag_coefficient").is_some(), warns, "{c:?}");
+            // What is left of e^{-t / tau} at the end, relative to the force then; to the
+            // round-off of differences of values near 1 (left = 2e-9 at 2000 steps).
+            let left = (force(end) - 1.0) / force(end);
+            let r = c.remaining.unwrap();
+            assert!((r - left).abs() < 1e-6 * left, "{r} {left}");
         }
+    }
+
+    /// The exponential through three samples, equally spaced or not, gives back what is left
+    /// of it; a straight line, an approach that speeds up, a turn back or no change give no
+    /// estimate.
+    #[test]
+    fn the_exponential_remainder_is_exact_for_an_exponential() {
+        let q = |t: f64| 3.0 - 2.0 * (-t / 7.0).exp();
+        for ts in [[10.0, 15.0, 20.0], [10.0, 13.5, 20.0], [1.0, 30.0, 31.0]] {
+            let r = exponential_remainder(ts.map(|t| (t, q(t)))).unwrap();
+            let left = 3.0 - q(ts[2]);
+            assert!((r - left).abs() < 1e-9 * left, "{ts:?}: {r} against {left}");
+        }
+        let none = |qs: [f64; 3]| exponential_remainder([(0.0, qs[0]), (1.0, qs[1]), (2.0, qs[2])]);
+        assert_eq!(none([0.0, 1.0, 2.0]), None, "straight line");
+        assert_eq!(none([0.0, 1.0, 3.0]), None, "speeding up");
+        assert_eq!(none([0.0, 1.0, 0.5]), None, "turning back");
+        assert_eq!(none([1.0, 1.0, 1.0]), None, "no change");
+        // Aitken's delta-squared where the spacing is equal: |d2| r / (1 - r).
+        let r = none([0.0, 1.0, 1.5]).unwrap();
+        assert!((r - 0.5).abs() < 1e-12, "{r}");
     }
 
     /// An angle's change is in degrees, against STEADY_DEGREES; a quantity reported only at
