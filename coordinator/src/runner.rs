@@ -669,9 +669,12 @@ fn drive(
         trajectory.steady =
             crate::steady_watch::SteadyHistory::for_metrics(&scene.scene.analysis.metrics);
     }
-    trajectory.steady = std::mem::take(&mut trajectory.steady).with_geometry(
-        crate::interface_metrics::InterfaceGeometry::of(&scene.scene, &st.configured.derived),
-    );
+    trajectory
+        .steady
+        .set_geometry(crate::interface_metrics::InterfaceGeometry::of(
+            &scene.scene,
+            &st.configured.derived,
+        ));
 
     let interval = scene.output_interval();
     let load_scale = largest_load(scene);

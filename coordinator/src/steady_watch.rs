@@ -222,7 +222,7 @@ impl Change {
 pub struct SteadyHistory {
     pub samples: BTreeMap<String, Vec<(f64, f64)>>,
     /// What the interface metrics read besides the bead centres; set by the run
-    /// ([`Self::with_geometry`]), at a resume too.
+    /// ([`Self::set_geometry`]), at a resume too.
     #[serde(skip)]
     geometry: Option<InterfaceGeometry>,
 }
@@ -251,11 +251,23 @@ impl SteadyHistory {
         }
     }
 
-    /// The same history, with what its interface metrics read besides the bead centres.
-    pub fn with_geometry(self, geometry: InterfaceGeometry) -> Self {
-        Self {
-            geometry: Some(geometry),
-            ..self
+    /// Give the history what its interface metrics read besides the bead centres.
+    pub fn set_geometry(&mut self, geometry: InterfaceGeometry) {
+        self.geometry = Some(geometry);
+    }
+
+    /// What `metric` reads: from the diagnostics, or, for an interface metric, from fibre 0's
+    /// bead centres `points` (`None` without them or without the geometry).
+    fn value_of(
+        &self,
+        metric: &str,
+        diagnostics: &[(String, f64)],
+        points: Option<&[[f64; 3]]>,
+    ) -> Option<f64> {
+        if reads_beads(metric) {
+            self.geometry.as_ref()?.value(metric, points?).ok()
+        } else {
+            quantity(metric, diagnostics)
         }
     }
 
@@ -284,15 +296,12 @@ impl SteadyHistory {
             return;
         }
         let points = centres(fibre0);
-        for (metric, list) in &mut self.samples {
-            let q = if reads_beads(metric) {
-                match (&self.geometry, &points) {
-                    (Some(g), Some(p)) => g.value(metric, p).ok(),
-                    _ => None,
-                }
-            } else {
-                quantity(metric, diagnostics)
-            };
+        let values: Vec<Option<f64>> = self
+            .samples
+            .keys()
+            .map(|m| self.value_of(m, diagnostics, points.as_deref()))
+            .collect();
+        for (list, q) in self.samples.values_mut().zip(values) {
             if let Some(q) = q.filter(|q| q.is_finite()) {
                 list.push((time, q));
             }
@@ -312,11 +321,7 @@ impl SteadyHistory {
         self.samples
             .keys()
             .filter_map(|m| {
-                let end = if reads_beads(m) {
-                    self.geometry.as_ref()?.value(m, points.as_ref()?).ok()
-                } else {
-                    quantity(m, diagnostics)
-                };
+                let end = self.value_of(m, diagnostics, points.as_deref());
                 Some((m.clone(), self.change(m, end_time, end)?))
             })
             .collect()
@@ -466,7 +471,8 @@ mod tests {
         };
         for (steps, warns) in [(200_u64, true), (2000, false)] {
             let metrics = ["final_tilt_deg".to_string()];
-            let mut h = SteadyHistory::for_metrics(&metrics).with_geometry(geometry.clone());
+            let mut h = SteadyHistory::for_metrics(&metrics);
+            h.set_geometry(geometry.clone());
             let mut bare = SteadyHistory::for_metrics(&metrics);
             for step in 1..=steps {
                 let (t, sample) = (step as f64, (step, steps, step == steps));
