@@ -1035,15 +1035,18 @@ mod tests {
         assert!(!render_markdown("t", "m", &[r], None).contains("fluid.re"));
     }
 
+    /// A study of scene `x.toml` and metric `m`, with the tables `rest`.
+    fn study_of(rest: &str) -> Study {
+        toml::from_str(&format!(
+            "name = \"s\"\nscene = \"x.toml\"\nmetric = \"m\"\n{rest}"
+        ))
+        .unwrap()
+    }
+
     /// The keys of a `[[vary]]` group that its labels leave out are named under the table.
     #[test]
     fn keys_the_labels_leave_out_are_named_under_the_table() {
-        let study = |vary: &str| -> Study {
-            toml::from_str(&format!(
-                "name = \"s\"\nscene = \"x.toml\"\nmetric = \"m\"\n[[vary]]\n{vary}"
-            ))
-            .unwrap()
-        };
+        let study = |vary: &str| study_of(&format!("[[vary]]\n{vary}"));
         let grouped = study(
             "keys = [\"fluid.grid\", \"fibre.0.bead_radius\", \"time.dt\"]\n\
              values = [[[180, 180], 6.0, 0.7], [[270, 270], 9.0, 1.575]]",
@@ -1063,13 +1066,7 @@ mod tests {
     /// later would override the earlier, and variants meant to differ would run one scene.
     #[test]
     fn a_key_is_given_in_one_place_only() {
-        let study = |rest: &str| -> Study {
-            toml::from_str(&format!(
-                "name = \"s\"\nscene = \"x.toml\"\nmetric = \"m\"\n{rest}"
-            ))
-            .unwrap()
-        };
-        let two = study(
+        let two = study_of(
             "[[vary]]\nkey = \"fibre.0.beads\"\nvalues = [4, 5]\n\
              [[vary]]\nkeys = [\"time.dt\", \"fibre.0.beads\"]\nvalues = [[0.1, 6]]\n",
         );
@@ -1078,11 +1075,13 @@ mod tests {
             "vary.1: `fibre.0.beads` is already varied by vary.0, and the later would \
              override the earlier in every variant; give each key in one place"
         );
-        let set = study("[set]\n\"time.dt\" = 0.1\n[[vary]]\nkey = \"time.dt\"\nvalues = [1]\n");
+        let set = study_of("[set]\n\"time.dt\" = 0.1\n[[vary]]\nkey = \"time.dt\"\nvalues = [1]\n");
         assert!(one_owner_per_key(&set)
             .unwrap_err()
             .starts_with("vary.0: `time.dt` is already set by [set]"));
-        assert!(one_owner_per_key(&study("[[vary]]\nkey = \"time.dt\"\nvalues = [1]\n")).is_ok());
+        assert!(
+            one_owner_per_key(&study_of("[[vary]]\nkey = \"time.dt\"\nvalues = [1]\n")).is_ok()
+        );
     }
 
     /// A class is shown alone for `orbit`, whose value is only the class's code, and with
